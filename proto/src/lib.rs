@@ -1,0 +1,1 @@
+//! SHIFT wire types.

@@ -1,0 +1,1 @@
+//! shiftd: the SHIFT daemon and its command-line front end.

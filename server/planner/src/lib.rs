@@ -1,0 +1,16 @@
+//! # shift-planner
+//!
+//! The coverage-planning algorithms of SHIFT: pure, synchronous and deterministic (every random choice comes
+//! from a seed passed in), with no I/O, no clock and no wire types. Units are metres, seconds and radians in
+//! the map frame unless a name says otherwise.
+//!
+//! Pipeline: [`map`] (grids, distance fields) → [`space`] (footprint, reach, coverable set) →
+//! `decompose` (regions) → `pattern` (lanes, spiral, boundary passes) → `order` (visiting order) →
+//! `link` (transits) → `metrics` (DESIGN §6).
+
+pub mod error;
+pub mod geom;
+pub mod map;
+pub mod space;
+
+pub use error::{PlannerError, Result};

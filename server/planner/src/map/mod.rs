@@ -1,0 +1,11 @@
+//! Maps: occupancy grids, their loaders, distance fields, and the live ikd-tree.
+
+pub mod distance;
+pub mod grid;
+pub mod json_grid;
+pub mod ros;
+
+pub use distance::DistanceField;
+pub use grid::{Cell, CellState, GridGeometry, OccupancyGrid, Thresholds};
+pub use json_grid::JsonGrid;
+pub use ros::{LoadedMap, MapMode, MapYaml, load_ros_map};

@@ -1,0 +1,223 @@
+//! Footprint and reach (DESIGN §6): where the robot's centre may go and what its tool can cover.
+//!
+//! - *traversable*: free cells whose centre is at least `robot_radius` from every non-free cell centre (the
+//!   ring just outside the map counts as non-free);
+//! - *reachable*: the 8-connected traversable component holding the start (seed 004, Alg. 1 — a flood fill);
+//! - *coverable*: free cells within `tool_width / 2` of a reachable cell.
+//!
+//! A start that is not traversable snaps to the nearest traversable cell, with a warning.
+
+use std::collections::VecDeque;
+
+use crate::error::{PlannerError, Result, finite};
+use crate::geom::Point2;
+use crate::map::{Cell, DistanceField, GridGeometry, OccupancyGrid};
+
+/// The robot as coverage sees it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RobotShape {
+    /// Radius of the robot's circular footprint, metres.
+    pub radius_m: f64,
+    /// Width of the swath its tool covers, metres (lanes are this far apart).
+    pub tool_width_m: f64,
+}
+
+impl RobotShape {
+    /// Validates both figures: finite and positive.
+    pub fn validate(&self) -> Result<()> {
+        for (name, v) in [("robot_radius", self.radius_m), ("tool_width", self.tool_width_m)] {
+            if !v.is_finite() || v <= 0.0 {
+                return Err(PlannerError::InvalidParam { name, reason: format!("must be a positive number of metres, got {v}") });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The occupancy grid with everything coverage derives from it for one robot and one start.
+#[derive(Debug, Clone)]
+pub struct CoverageSpace {
+    /// The occupancy grid.
+    pub grid: OccupancyGrid,
+    /// The robot.
+    pub robot: RobotShape,
+    /// Distance from every cell centre to the nearest non-free cell centre, metres.
+    pub clearance: DistanceField,
+    /// Traversable cells.
+    pub traversable: Vec<bool>,
+    /// Reachable cells.
+    pub reachable: Vec<bool>,
+    /// Coverable cells.
+    pub coverable: Vec<bool>,
+    /// The start cell (after snapping).
+    pub start_cell: Cell,
+    /// The start point in the map frame (the requested one, or the snapped cell's centre), metres.
+    pub start: Point2,
+    /// Remarks for the user (e.g. the start was moved).
+    pub warnings: Vec<String>,
+}
+
+impl CoverageSpace {
+    /// Derives the spaces for `robot` starting at `start` (map frame, metres).
+    pub fn new(grid: OccupancyGrid, robot: RobotShape, start: Point2) -> Result<Self> {
+        robot.validate()?;
+        finite("start x", start.x)?;
+        finite("start y", start.y)?;
+        let g = grid.geometry;
+        let requested = g.locate(start).ok_or(PlannerError::StartOutsideMap { x: start.x, y: start.y })?;
+        let clearance = DistanceField::compute(g, |i| !grid.is_free(i), true);
+        // A hair of tolerance so that a centre exactly robot_radius away counts (floating-point noise).
+        let r = robot.radius_m - 1e-9;
+        let traversable: Vec<bool> = (0..g.len()).map(|i| grid.is_free(i) && clearance.at(i) >= r).collect();
+        let mut warnings = Vec::new();
+        let (start_cell, start_pt) = if traversable[g.index(requested)] {
+            (requested, start)
+        } else {
+            let best = (0..g.len())
+                .filter(|&i| traversable[i])
+                .min_by(|&a, &b| (g.center_of(a) - start).norm().total_cmp(&(g.center_of(b) - start).norm()))
+                .ok_or(PlannerError::NoTraversableSpace { radius_m: robot.radius_m })?;
+            let c = g.cell(best);
+            let p = g.center(c);
+            warnings.push(format!(
+                "start ({:.3}, {:.3}) is not traversable for radius {} m; moved {:.3} m to ({:.3}, {:.3})",
+                start.x,
+                start.y,
+                robot.radius_m,
+                (p - start).norm(),
+                p.x,
+                p.y
+            ));
+            (c, p)
+        };
+        let reachable = flood_fill8(&g, &traversable, start_cell);
+        let to_reachable = DistanceField::compute(g, |i| reachable[i], false);
+        let half = robot.tool_width_m / 2.0 + 1e-9;
+        let coverable = (0..g.len()).map(|i| grid.is_free(i) && to_reachable.at(i) <= half).collect();
+        Ok(Self {
+            grid,
+            robot,
+            clearance,
+            traversable,
+            reachable,
+            coverable,
+            start_cell,
+            start: start_pt,
+            warnings,
+        })
+    }
+
+    /// The raster geometry.
+    pub fn geometry(&self) -> &GridGeometry {
+        &self.grid.geometry
+    }
+
+    /// Clearance of an arbitrary point (distance to the nearest non-free cell centre), metres.
+    #[inline]
+    pub fn clearance_at(&self, p: Point2) -> f64 {
+        self.clearance.at_point(p)
+    }
+
+    /// True when the robot centre may stand at `p`: on the reachable set with at least `radius` clearance.
+    #[inline]
+    pub fn point_ok(&self, p: Point2) -> bool {
+        match self.geometry().locate(p) {
+            Some(c) => self.reachable[self.geometry().index(c)] && self.clearance_at(p) >= self.robot.radius_m - 1e-9,
+            None => false,
+        }
+    }
+
+    /// True when every point of segment `a`–`b` keeps `radius` clearance on the reachable set, checked every
+    /// quarter cell.
+    pub fn segment_ok(&self, a: Point2, b: Point2) -> bool {
+        let len = (b - a).norm();
+        let step = self.geometry().resolution * 0.25;
+        let n = (len / step).ceil().max(1.0) as usize;
+        (0..=n).all(|k| self.point_ok(a + (b - a) * (k as f64 / n as f64)))
+    }
+
+    /// Number of reachable cells.
+    pub fn reachable_count(&self) -> usize {
+        self.reachable.iter().filter(|&&r| r).count()
+    }
+
+    /// Number of coverable cells.
+    pub fn coverable_count(&self) -> usize {
+        self.coverable.iter().filter(|&&r| r).count()
+    }
+}
+
+/// 8-connected flood fill of `mask` from `seed` (seed 004, Alg. 1 with 8 neighbours).
+pub fn flood_fill8(g: &GridGeometry, mask: &[bool], seed: Cell) -> Vec<bool> {
+    let mut out = vec![false; g.len()];
+    let s = g.index(seed);
+    if !mask[s] {
+        return out;
+    }
+    out[s] = true;
+    let mut queue = VecDeque::from([seed]);
+    while let Some(c) = queue.pop_front() {
+        for n in g.neighbors8(c) {
+            let i = g.index(n);
+            if mask[i] && !out[i] {
+                out[i] = true;
+                queue.push_back(n);
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::map::CellState;
+
+    fn room() -> OccupancyGrid {
+        // 4 m × 2 m at 0.1 m, walls around, a wall splitting it at x = 2 m with no door.
+        let g = GridGeometry::new(40, 20, 0.1, Point2::origin()).expect("valid");
+        let mut grid = OccupancyGrid::filled(g, CellState::Free);
+        grid.fill_rect(1.95, 0.0, 2.05, 2.0, CellState::Occupied);
+        grid
+    }
+
+    #[test]
+    fn reach_stops_at_walls_and_coverable_reaches_them() {
+        let robot = RobotShape { radius_m: 0.2, tool_width_m: 0.4 };
+        let s = CoverageSpace::new(room(), robot, Point2::new(0.5, 1.0)).expect("ok");
+        let g = *s.geometry();
+        assert!(s.warnings.is_empty());
+        for i in 0..g.len() {
+            let p = g.center_of(i);
+            if s.reachable[i] {
+                assert!(p.x < 1.95 && s.clearance.at(i) >= 0.2 - 1e-9);
+            }
+            if s.coverable[i] {
+                assert!(p.x < 1.95);
+            }
+        }
+        // The cell next to the dividing wall is coverable: it is 0.1 m from a reachable cell... within 0.2.
+        assert!(s.coverable[g.index(g.locate(Point2::new(1.85, 1.0)).expect("on map"))]);
+        assert!(!s.reachable[g.index(g.locate(Point2::new(1.85, 1.0)).expect("on map"))]);
+    }
+
+    #[test]
+    fn start_in_obstacle_snaps_with_warning() {
+        let robot = RobotShape { radius_m: 0.2, tool_width_m: 0.4 };
+        let s = CoverageSpace::new(room(), robot, Point2::new(2.0, 1.0)).expect("ok");
+        assert_eq!(s.warnings.len(), 1);
+        assert!(s.reachable[s.geometry().index(s.start_cell)]);
+        assert!((s.start.x - 2.0).abs() < 0.35);
+    }
+
+    #[test]
+    fn rejects_bad_requests() {
+        let ok = RobotShape { radius_m: 0.2, tool_width_m: 0.4 };
+        assert!(matches!(CoverageSpace::new(room(), ok, Point2::new(9.0, 1.0)), Err(PlannerError::StartOutsideMap { .. })));
+        assert!(matches!(CoverageSpace::new(room(), ok, Point2::new(f64::NAN, 1.0)), Err(PlannerError::NonFinite { .. })));
+        let bad = RobotShape { radius_m: -0.2, tool_width_m: 0.4 };
+        assert!(matches!(CoverageSpace::new(room(), bad, Point2::new(0.5, 1.0)), Err(PlannerError::InvalidParam { .. })));
+        let huge = RobotShape { radius_m: 5.0, tool_width_m: 0.4 };
+        assert!(matches!(CoverageSpace::new(room(), huge, Point2::new(0.5, 1.0)), Err(PlannerError::NoTraversableSpace { .. })));
+    }
+}
