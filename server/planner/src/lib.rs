@@ -8,9 +8,11 @@
 //! `decompose` (regions) → `pattern` (lanes, spiral, boundary passes) → `order` (visiting order) →
 //! `link` (transits) → `metrics` (DESIGN §6).
 
+pub mod decompose;
 pub mod error;
 pub mod geom;
 pub mod map;
+pub mod metrics;
 pub mod space;
 
 pub use error::{PlannerError, Result};

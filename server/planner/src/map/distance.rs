@@ -122,6 +122,20 @@ impl DistanceField {
         ))
     }
 
+    /// Linear index (in this grid) of the site nearest to cell `i`; `None` when there is no site or the nearest
+    /// site is the ring outside the map.
+    #[inline]
+    pub fn nearest_site_index(&self, i: usize) -> Option<usize> {
+        let f = self.feature[i];
+        if f == u32::MAX {
+            return None;
+        }
+        let pw = self.geometry.width + 2 * self.pad;
+        let (fx, fy) = (f as usize % pw, f as usize / pw);
+        let (x, y) = (fx.checked_sub(self.pad)?, fy.checked_sub(self.pad)?);
+        (x < self.geometry.width && y < self.geometry.height).then_some(y * self.geometry.width + x)
+    }
+
     /// Distance in metres from an arbitrary map-frame point to the nearest site centre. Exact in practice: the
     /// minimum over the nearest sites of the 3 × 3 cells around `p` (the nearest site of a point is the
     /// nearest site of one of the cells whose Voronoi region it lies in). Points off the map return 0 when the

@@ -1,0 +1,139 @@
+//! Plan metrics exactly as DESIGN §6 defines them. The CLI, the API and the benches all call [`evaluate`].
+//!
+//! - coverage_pct = |covered ∩ coverable| / |coverable| × 100, covered = cells whose centre lies within
+//!   tool_width / 2 of the path;
+//! - overlap_pct = (length × tool_width − covered area) / covered area × 100;
+//! - turns = heading changes of 30° or more between consecutive segments;
+//! - collisions = path points (every segment sampled each quarter cell) closer than robot_radius to a non-free
+//!   cell centre.
+
+pub mod coverage;
+
+pub use coverage::CoverageRaster;
+
+use crate::geom::{Point2, heading_change};
+use crate::space::CoverageSpace;
+
+/// A heading change at least this large counts as a turn (radians).
+pub const TURN_THRESHOLD_RAD: f64 = std::f64::consts::PI / 6.0;
+
+/// Figures of merit of a path on a coverage space.
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
+pub struct PlanMetrics {
+    /// Share of coverable cells covered, percent.
+    pub coverage_pct: f64,
+    /// Swept area beyond the covered area, percent of the covered area.
+    pub overlap_pct: f64,
+    /// Path length, metres.
+    pub length_m: f64,
+    /// Heading changes of 30° or more.
+    pub turns: usize,
+    /// Sampled path points closer than the robot radius to a non-free cell.
+    pub collisions: usize,
+    /// Coverable cells.
+    pub coverable_cells: usize,
+    /// Coverable cells that are covered.
+    pub covered_coverable_cells: usize,
+}
+
+/// Computes every metric of `path` (map frame, metres) on `space`.
+pub fn evaluate(space: &CoverageSpace, path: &[Point2]) -> PlanMetrics {
+    let g = *space.geometry();
+    let w = space.robot.tool_width_m;
+    let mut raster = CoverageRaster::new(g, w / 2.0);
+    raster.stamp_polyline(path);
+    let covered = raster.count();
+    let coverable_cells = space.coverable_count();
+    let covered_coverable_cells = (0..g.len()).filter(|&i| space.coverable[i] && raster.is_covered(i)).count();
+    let length_m = crate::geom::polyline_length(path);
+    let covered_area = covered as f64 * g.resolution * g.resolution;
+    let overlap_pct = if covered_area > 0.0 { (length_m * w - covered_area) / covered_area * 100.0 } else { 0.0 };
+    let coverage_pct = if coverable_cells > 0 {
+        covered_coverable_cells as f64 / coverable_cells as f64 * 100.0
+    } else {
+        100.0
+    };
+    PlanMetrics {
+        coverage_pct,
+        overlap_pct,
+        length_m,
+        turns: count_turns(path),
+        collisions: count_collisions(space, path),
+        coverable_cells,
+        covered_coverable_cells,
+    }
+}
+
+/// Heading changes of at least 30° between consecutive non-degenerate segments.
+pub fn count_turns(path: &[Point2]) -> usize {
+    let dirs: Vec<_> = path
+        .windows(2)
+        .map(|s| s[1] - s[0])
+        .filter(|d| d.norm() > 1e-9)
+        .collect();
+    dirs.windows(2).filter(|d| heading_change(d[0], d[1]) >= TURN_THRESHOLD_RAD - 1e-12).count()
+}
+
+/// Path points closer than the robot radius to a non-free cell, sampling each segment every quarter cell.
+pub fn count_collisions(space: &CoverageSpace, path: &[Point2]) -> usize {
+    let r = space.robot.radius_m - 1e-6;
+    let step = space.geometry().resolution * 0.25;
+    let mut n = 0;
+    if let [p] = path {
+        return usize::from(space.clearance_at(*p) < r);
+    }
+    for (k, s) in path.windows(2).enumerate() {
+        let len = (s[1] - s[0]).norm();
+        let m = (len / step).ceil().max(1.0) as usize;
+        let first = if k == 0 { 0 } else { 1 };
+        for j in first..=m {
+            let p = s[0] + (s[1] - s[0]) * (j as f64 / m as f64);
+            if space.clearance_at(p) < r {
+                n += 1;
+            }
+        }
+    }
+    n
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::map::{CellState, GridGeometry, OccupancyGrid};
+    use crate::space::RobotShape;
+
+    #[test]
+    fn lanes_over_an_empty_room() {
+        // 3 m × 1.2 m room; tool 0.4: lanes at y = 0.2+0.1·k…, clearance radius 0.2.
+        let g = GridGeometry::new(30, 12, 0.1, Point2::origin()).expect("valid");
+        let grid = OccupancyGrid::filled(g, CellState::Free);
+        let space = CoverageSpace::new(grid, RobotShape { radius_m: 0.2, tool_width_m: 0.4 }, Point2::new(0.5, 0.5))
+            .expect("ok");
+        // Reachable centres: x in [0.15, 2.85], y in [0.15, 1.05] (0.2 m from the ring outside the map).
+        let path = vec![
+            Point2::new(0.15, 0.15),
+            Point2::new(2.85, 0.15),
+            Point2::new(2.85, 0.45),
+            Point2::new(0.15, 0.45),
+            Point2::new(0.15, 0.75),
+            Point2::new(2.85, 0.75),
+            Point2::new(2.85, 1.05),
+            Point2::new(0.15, 1.05),
+        ];
+        let m = evaluate(&space, &path);
+        assert_eq!(m.collisions, 0);
+        assert_eq!(m.turns, 6);
+        assert!((m.length_m - (4.0 * 2.7 + 3.0 * 0.3)).abs() < 1e-9);
+        assert_eq!(m.coverage_pct, 100.0, "{m:?}");
+        // Four lanes where 3.5 would do: about 25 % overlap.
+        assert!(m.overlap_pct > 15.0 && m.overlap_pct < 35.0, "{m:?}");
+        // Dropping the middle lane leaves a band uncovered.
+        let sparse = evaluate(&space, &[path[0], path[1], path[6], path[7]]);
+        assert!(sparse.coverage_pct < 90.0, "{sparse:?}");
+        // A path through the wall ring collides.
+        let bad = evaluate(&space, &[Point2::new(0.05, 0.5), Point2::new(1.0, 0.5)]);
+        assert!(bad.collisions > 0);
+        // An empty path covers nothing.
+        assert_eq!(evaluate(&space, &[]).coverage_pct, 0.0);
+    }
+}
