@@ -1,0 +1,81 @@
+//! In-region coverage patterns: what a region's sweep is made of.
+//!
+//! A pattern turns one region into [`Task`]s — polylines the robot must drive, in either direction: the
+//! boustrophedon lanes ([`lanes`]), the rings of a spiral ([`spiral`]), and the targeted passes that cover
+//! what those miss ([`boundary`]: stretches of the wall contour, and single visits into pockets). Ordering
+//! the tasks and linking them is the job of `order` and `link`.
+
+pub mod boundary;
+pub mod contour;
+pub mod lanes;
+pub mod spiral;
+
+use crate::geom::Point2;
+
+/// What a task is for (kept for rendering and statistics).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum TaskKind {
+    /// A straight boustrophedon lane.
+    Lane,
+    /// A ring of a spiral (a closed loop).
+    Ring,
+    /// A stretch of wall or obstacle contour that lanes cannot reach.
+    Boundary,
+    /// A single point to visit, covering a pocket.
+    Visit,
+}
+
+/// A polyline to drive (map frame, metres). Open tasks may be driven in either direction; closed tasks
+/// (rings) start and end at the same vertex and may start at any vertex.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Task {
+    /// The vertices; straight segments between them. Every segment keeps the robot's clearance.
+    pub points: Vec<Point2>,
+    /// What the task is for.
+    pub kind: TaskKind,
+}
+
+impl Task {
+    /// Length of the polyline, metres.
+    pub fn length(&self) -> f64 {
+        crate::geom::polyline_length(&self.points)
+    }
+
+    /// True for closed loops (first vertex equals the last).
+    pub fn is_closed(&self) -> bool {
+        self.points.len() > 2 && self.points.first() == self.points.last()
+    }
+}
+
+/// The in-region patterns the planner offers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
+pub enum PatternMethod {
+    /// Boustrophedon lanes along each region's best direction.
+    #[default]
+    Lanes,
+    /// Rings from the region's edge inwards, one tool width apart.
+    Spiral,
+}
+
+impl PatternMethod {
+    /// Every pattern, in CLI order.
+    pub const ALL: [Self; 2] = [Self::Lanes, Self::Spiral];
+
+    /// The CLI / API name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Lanes => "lanes",
+            Self::Spiral => "spiral",
+        }
+    }
+}
+
+impl std::str::FromStr for PatternMethod {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        Self::ALL
+            .into_iter()
+            .find(|m| m.name() == s)
+            .ok_or_else(|| format!("unknown pattern {s:?}; expected lanes or spiral"))
+    }
+}

@@ -1,0 +1,68 @@
+//! Spiral pattern: rings from the region's edge inwards, one tool width apart.
+//!
+//! Ring k is the contour of the region cells at least `res + k · tool_width` from the region's outside
+//! (distance transform on the region's bounding box). Each ring is a closed task; the ordering stage picks
+//! where each ring is entered and in which direction, which yields the inward spiral.
+
+use super::contour::trace_loops;
+use super::lanes::RegionView;
+use super::{Task, TaskKind};
+use crate::geom::{Point2, simplify_polyline};
+use crate::map::{DistanceField, GridGeometry};
+use crate::space::CoverageSpace;
+
+/// Rings of a region, outermost first.
+pub fn plan_rings(space: &CoverageSpace, region: RegionView<'_>) -> Vec<Task> {
+    let g = *space.geometry();
+    let res = g.resolution;
+    let w = space.robot.tool_width_m;
+    let (mut x0, mut y0, mut x1, mut y1) = (usize::MAX, usize::MAX, 0, 0);
+    for &i in region.cells {
+        let c = g.cell(i);
+        (x0, y0, x1, y1) = (x0.min(c.x), y0.min(c.y), x1.max(c.x), y1.max(c.y));
+    }
+    if x0 == usize::MAX {
+        return Vec::new();
+    }
+    let (bw, bh) = (x1 - x0 + 1, y1 - y0 + 1);
+    let Ok(sub) = GridGeometry::new(bw, bh, res, g.center(crate::map::Cell::new(x0, y0)) - nalgebra::Vector2::new(res / 2.0, res / 2.0))
+    else {
+        return Vec::new();
+    };
+    let global = |j: usize| (y0 + j / bw) * g.width + x0 + j % bw;
+    let inside: Vec<bool> = (0..sub.len()).map(|j| region.labels[global(j)] == region.id).collect();
+    let depth = DistanceField::compute(sub, |j| !inside[j], true);
+    let mut tasks = Vec::new();
+    for k in 0.. {
+        let level = res + k as f64 * w - 1e-9;
+        let mask: Vec<bool> = (0..sub.len()).map(|j| inside[j] && depth.at(j) >= level).collect();
+        if !mask.iter().any(|&m| m) {
+            break;
+        }
+        for lp in trace_loops(&sub, &mask) {
+            let mut pts: Vec<Point2> = lp.iter().map(|&j| sub.center_of(j)).collect();
+            if pts.len() > 2 {
+                pts.push(pts[0]);
+            }
+            // Split where a diagonal step would cut a corner too closely.
+            let mut piece: Vec<Point2> = Vec::new();
+            let flush = |piece: &mut Vec<Point2>, tasks: &mut Vec<Task>| {
+                if !piece.is_empty() {
+                    let simple = simplify_polyline(piece, 0.5 * res, &|a, b| space.segment_ok(a, b));
+                    tasks.push(Task { points: simple, kind: TaskKind::Ring });
+                    piece.clear();
+                }
+            };
+            for p in pts {
+                if let Some(&last) = piece.last() {
+                    if !space.segment_ok(last, p) {
+                        flush(&mut piece, &mut tasks);
+                    }
+                }
+                piece.push(p);
+            }
+            flush(&mut piece, &mut tasks);
+        }
+    }
+    tasks
+}
