@@ -11,6 +11,7 @@
 pub mod error;
 pub mod geom;
 pub mod map;
+pub mod order;
 pub mod space;
 
 pub use error::{PlannerError, Result};
