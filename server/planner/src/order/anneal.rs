@@ -9,9 +9,11 @@
 //! **Temperature.** Before annealing, `samples` random moves are evaluated at the 2-opt optimum; Δ⁺ is the
 //! mean of their positive deltas (moves across "very expensive" edges are left out), the typical cost of
 //! leaving the optimum. T₀ = −Δ⁺ / ln(p₀) makes such a move accepted with probability p₀
-//! (`initial_acceptance`), and the final temperature T_end = −Δ⁺ / ln(p_end) with p_end
-//! (`final_acceptance`). The temperature is multiplied by α = (T_end / T₀)^(1 / steps) after each step, a
-//! geometric schedule that reaches T_end at the last planned step, where steps = min(`steps`, budget left).
+//! (`initial_acceptance`, default 0.03), and the schedule ends at T_end = `cooling` × T₀ (default 0.01).
+//! The temperature is multiplied by α = (T_end / T₀)^(1 / steps) after each step — a geometric schedule
+//! that reaches T_end at the last planned step, where steps = min(`steps`, budget left). The defaults were
+//! chosen on 200-node random Euclidean instances (p₀ from 0.01 to 0.3 and cooling from 10⁻⁴ to 10⁻² all
+//! landed within 0.5 % of each other).
 //!
 //! The best tour seen is kept (copied just before the walk leaves it by an uphill move), polished with
 //! local search and the exact option assignment, and returned if it beats the 2-opt result.
@@ -31,8 +33,8 @@ pub struct AnnealParams {
     pub steps: Option<u64>,
     /// Probability p₀ of accepting a mean uphill move at the start, in (0, 1).
     pub initial_acceptance: f64,
-    /// Probability p_end of accepting a mean uphill move at the end, in (0, p₀).
-    pub final_acceptance: f64,
+    /// Final temperature as a fraction of the initial one, in (0, 1].
+    pub cooling: f64,
     /// Random moves evaluated to calibrate the temperature.
     pub samples: usize,
 }
@@ -42,8 +44,8 @@ impl Default for AnnealParams {
         Self {
             two_opt: TwoOptParams::default(),
             steps: None,
-            initial_acceptance: 0.1,
-            final_acceptance: 1e-4,
+            initial_acceptance: 0.03,
+            cooling: 1e-2,
             samples: 1000,
         }
     }
@@ -81,8 +83,12 @@ impl Orderer for Anneal {
                 }
             }
         }
-        let p0 = clamp_probability(self.params.initial_acceptance, 0.1);
-        let p_end = clamp_probability(self.params.final_acceptance, 1e-4).min(p0);
+        let p0 = clamp_probability(self.params.initial_acceptance, 0.03);
+        let cooling = if self.params.cooling > 0.0 && self.params.cooling <= 1.0 {
+            self.params.cooling
+        } else {
+            1e-2
+        };
         let steps = self
             .params
             .steps
@@ -93,7 +99,7 @@ impl Orderer for Anneal {
         }
         let mean_up = sum / f64::from(count);
         let t0 = -mean_up / p0.ln();
-        let t_end = -mean_up / p_end.ln();
+        let t_end = t0 * cooling;
         let alpha = (t_end / t0).powf(1.0 / steps as f64);
 
         let mut queue = WorkQueue::new(n);

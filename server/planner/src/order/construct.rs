@@ -143,3 +143,67 @@ fn cheapest_insertion(inst: &Inst<'_>) -> Vec<usize> {
     }
     order
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::testutil::euclid;
+    use super::super::{DistanceMatrix, TourOption};
+    use super::*;
+
+    #[test]
+    fn both_constructions_visit_every_node_once() {
+        for n in [0, 1, 2, 7, 50] {
+            for closed in [true, false] {
+                let p = euclid(n, 4, closed, n as u64);
+                for m in [
+                    Construction::NearestNeighbour,
+                    Construction::CheapestInsertion,
+                ] {
+                    let t = construct(&p, m);
+                    assert_eq!(t.check(&p), Ok(()), "{m:?} n={n}");
+                    assert_eq!(t.cost, super::super::tour_cost(&p, &t.order, &t.options));
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn square_corners() {
+        // Depot at (0,0); nodes at the other corners of a 10 m square and at its centre.
+        let pts = [
+            (0.0, 0.0),
+            (10.0, 0.0),
+            (10.0, 10.0),
+            (0.0, 10.0),
+            (5.0, 5.0),
+        ];
+        let dist = DistanceMatrix::from_fn(5, |i, j| {
+            let (a, b): ((f64, f64), (f64, f64)) = (pts[i], pts[j]);
+            (a.0 - b.0).hypot(a.1 - b.1)
+        });
+        let nodes = (1..5)
+            .map(|q| {
+                vec![TourOption {
+                    entry: q,
+                    exit: q,
+                    cost: 0.0,
+                    reverse: 0,
+                }]
+            })
+            .collect();
+        let p = TourProblem {
+            dist,
+            depot: 0,
+            nodes,
+            closed: true,
+        };
+        let ci = construct(&p, Construction::CheapestInsertion);
+        // The perimeter with one detour through the centre: 30 + 2·√50.
+        assert!(
+            (ci.cost - (30.0 + 2.0 * 50f64.sqrt())).abs() < 1e-9,
+            "{ci:?}"
+        );
+        let nn = construct(&p, Construction::NearestNeighbour);
+        assert_eq!(nn.order[0], 3, "the centre is nearest to the depot");
+    }
+}

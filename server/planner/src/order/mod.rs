@@ -563,11 +563,11 @@ impl<'p> Inst<'p> {
             }
             for (k, t) in node.iter().enumerate() {
                 let opt = match node.get(t.reverse) {
-                    // A true reverse pair gets one cost (the lower), so reversal deltas are exact.
+                    // A true reverse pair gets one cost (the higher), so reversal deltas are exact.
                     Some(r) if r.entry == t.exit && r.exit == t.entry && r.reverse == k => Opt {
                         entry: t.entry,
                         exit: t.exit,
-                        cost: clamp(t.cost).min(clamp(r.cost)),
+                        cost: clamp(t.cost).max(clamp(r.cost)),
                         rev: t.reverse,
                     },
                     _ => {
@@ -1213,6 +1213,65 @@ mod tests {
         let t = TwoOpt::default().solve(&p, 0, &SolveBudget::unlimited());
         assert_eq!(t.check(&p), Ok(()));
         assert!(t.cost < 0.95 * nn.cost, "{} vs {}", t.cost, nn.cost);
+    }
+
+    /// Solution quality and time on 200-node random Euclidean instances (run with `--ignored --nocapture`,
+    /// in release-like `test` profile). Reports the mean over 5 seeds of cost / nearest-neighbour cost.
+    #[test]
+    #[ignore = "measurement, prints a table"]
+    fn quality_report_200() {
+        for (label, k) in [("points (k=1)", 1), ("mixed options (k≤4)", 4)] {
+            let seeds = 0..5u64;
+            let mut rows: Vec<(String, f64, f64)> = Vec::new();
+            let problems: Vec<TourProblem> = seeds
+                .clone()
+                .map(|s| euclid(200, k, true, 1000 + s))
+                .collect();
+            let nn: Vec<f64> = problems
+                .iter()
+                .map(|p| construct(p, Construction::NearestNeighbour).cost)
+                .collect();
+            let mut measure = |name: String, f: &dyn Fn(&TourProblem, u64) -> Tour| {
+                let start = std::time::Instant::now();
+                let mut ratio = 0.0;
+                for (i, p) in problems.iter().enumerate() {
+                    let t = f(p, i as u64);
+                    assert_eq!(t.check(p), Ok(()));
+                    ratio += t.cost / nn[i];
+                }
+                let ms = start.elapsed().as_secs_f64() * 1e3 / problems.len() as f64;
+                rows.push((name, ratio / problems.len() as f64, ms));
+            };
+            measure("nearest neighbour".into(), &|p, _| {
+                construct(p, Construction::NearestNeighbour)
+            });
+            measure("cheapest insertion".into(), &|p, _| {
+                construct(p, Construction::CheapestInsertion)
+            });
+            for m in OrderMethod::ALL {
+                measure(m.name().into(), &|p, s| {
+                    m.orderer().solve(p, s, &SolveBudget::unlimited())
+                });
+            }
+            println!("200 nodes, {label}: cost / nearest-neighbour cost, mean of 5 seeds");
+            for (name, r, ms) in rows {
+                println!("  {name:<20} {r:.4}  {ms:8.1} ms");
+            }
+        }
+        // Large n: neighbour lists keep the local search near-linear per pass.
+        for n in [1000, 3000] {
+            let p = euclid(n, 4, true, 7);
+            let start = std::time::Instant::now();
+            let nn = construct(&p, Construction::NearestNeighbour);
+            let nn_ms = start.elapsed().as_secs_f64() * 1e3;
+            let start = std::time::Instant::now();
+            let t = TwoOpt::default().solve(&p, 0, &SolveBudget::unlimited());
+            let ms = start.elapsed().as_secs_f64() * 1e3;
+            println!(
+                "{n} nodes: nearest neighbour {nn_ms:.0} ms; two-opt {:.4} of it in {ms:.0} ms",
+                t.cost / nn.cost
+            );
+        }
     }
 
     proptest! {

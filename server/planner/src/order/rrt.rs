@@ -22,7 +22,7 @@ use crate::order::two_opt::Search;
 pub struct RrtParams {
     /// The local search that makes the start and repairs each perturbation.
     pub two_opt: TwoOptParams,
-    /// Rounds (perturbation + repair); `None` = 1000 + 20 per node. The budget may end them earlier.
+    /// Rounds (perturbation + repair); `None` = 500 + 5 per node. The budget may end them earlier.
     pub rounds: Option<u64>,
     /// A candidate is accepted when its cost is below record × (1 + deviation).
     pub deviation: f64,
@@ -35,7 +35,7 @@ impl Default for RrtParams {
         Self {
             two_opt: TwoOptParams::default(),
             rounds: None,
-            deviation: 0.01,
+            deviation: 0.005,
             max_segment: 30,
         }
     }
@@ -56,7 +56,7 @@ impl Orderer for RecordToRecord {
         };
         let two_opt = better(problem, initial, &start);
         let n = search.inst.n;
-        let rounds = self.params.rounds.unwrap_or(1000 + 20 * n as u64);
+        let rounds = self.params.rounds.unwrap_or(500 + 5 * n as u64);
         let deviation = if self.params.deviation.is_finite() {
             self.params.deviation.max(0.0)
         } else {
@@ -114,9 +114,7 @@ pub(crate) fn perturb(
         let touched = touched.map(|s| search.node_at(st, s));
         st.order[p1..p3].rotate_left(len_b);
         st.opt[p1..p3].rotate_left(len_b);
-        for k in p1..p3 {
-            st.pos[st.order[k]] = k + 1;
-        }
+        st.refresh(&search.inst, p1, p3);
         let after = [p1, p1 + len_c, p3];
         let added: f64 = after.iter().map(|&s| search.edge(st, s)).sum();
         st.cost += added - removed;
@@ -142,13 +140,60 @@ pub(crate) fn perturb(
         let touched = [x - 1, x, x + 1, y - 1, y, y + 1].map(|s| search.node_at(st, s));
         st.order.swap(x - 1, y - 1);
         st.opt.swap(x - 1, y - 1);
-        st.pos[st.order[x - 1]] = x;
-        st.pos[st.order[y - 1]] = y;
+        st.refresh(&search.inst, x - 1, x);
+        st.refresh(&search.inst, y - 1, y);
         let added: f64 = edges[..count].iter().map(|&s| search.edge(st, s)).sum();
         st.cost += added - removed;
         touched
     };
     for v in touched {
         queue.push(v);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use proptest::prelude::*;
+
+    use super::super::testutil::{euclid, random_matrix};
+    use super::super::{Anneal, OrderMethod, TwoOpt};
+    use super::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(32))]
+
+        /// Record-to-record travel and annealing keep the best tour, so for the same seed and budget they
+        /// are never worse than 2-opt.
+        #[test]
+        fn never_worse_than_two_opt(
+            n in 0usize..50, k in 1usize..=4, closed: bool, metric: bool, seed: u64,
+            max_iterations in prop::sample::select(vec![0u64, 1, 300, 5_000, 60_000, u64::MAX]),
+        ) {
+            let p = if metric { euclid(n, k, closed, seed) } else { random_matrix(n, k, closed, seed) };
+            let budget = SolveBudget::new(max_iterations);
+            let base = TwoOpt::default().solve(&p, seed, &budget);
+            for t in [RecordToRecord::default().solve(&p, seed, &budget), Anneal::default().solve(&p, seed, &budget)] {
+                prop_assert_eq!(t.check(&p), Ok(()));
+                prop_assert!(t.cost <= base.cost, "{} > {}", t.cost, base.cost);
+            }
+        }
+    }
+
+    #[test]
+    fn metaheuristics_improve_on_two_opt_at_100_nodes() {
+        let mut gains = [0.0f64; 2];
+        for seed in 0..3 {
+            let p = euclid(100, 4, true, 40 + seed);
+            let base = TwoOpt::default()
+                .solve(&p, seed, &SolveBudget::unlimited())
+                .cost;
+            for (g, m) in gains
+                .iter_mut()
+                .zip([OrderMethod::RecordToRecord, OrderMethod::Anneal])
+            {
+                *g += base - m.orderer().solve(&p, seed, &SolveBudget::unlimited()).cost;
+            }
+        }
+        assert!(gains.iter().all(|&g| g > 0.0), "{gains:?}");
     }
 }

@@ -12,8 +12,9 @@
 //!
 //! Candidate moves come from neighbour lists: for every node (and the depot) the `neighbours` nearest nodes
 //! by point distance (the least distance between any entry/exit point of one and any of the other). Moves
-//! that create an edge between a node and one of its neighbours are tried; the best improving one for that
-//! node is applied (first improvement over nodes, best over that node's candidates) and the nodes at the
+//! that create an edge between a node and one of its neighbours are tried, only for neighbours nearer than
+//! the node's longer tour edge (positive-gain pruning: the new edge must be paid for by one of the node's
+//! own edges); the best improving one for that node is applied (first improvement over nodes, best over that node's candidates) and the nodes at the
 //! changed edges are queued again ("don't-look bits"). When the queue is empty the exact option assignment
 //! ([`super::best_options`], O(n·k²)) is run on the order; if it improves, the nodes whose option changed
 //! are queued and the search resumes, until neither improves.
@@ -114,28 +115,38 @@ pub(crate) struct State {
     pub opt: Vec<usize>,
     /// Slot (1-based) of every node.
     pub pos: Vec<usize>,
+    /// Entry point of `order[k]` with `opt[k]` (a cache for the move deltas).
+    ent: Vec<usize>,
+    /// Exit point of `order[k]` with `opt[k]`.
+    ext: Vec<usize>,
     /// Tracked cost, metres; exact after [`Search::optimise`].
     pub cost: f64,
 }
 
 impl State {
     pub fn new(inst: &Inst<'_>, order: Vec<usize>, opt: Vec<usize>) -> Self {
-        let mut pos = vec![0; inst.n];
-        for (k, &v) in order.iter().enumerate() {
-            pos[v] = k + 1;
-        }
+        let n = order.len();
         let cost = inst.eval(&order, &opt);
-        Self {
+        let mut st = Self {
             order,
             opt,
-            pos,
+            pos: vec![0; inst.n],
+            ent: vec![0; n],
+            ext: vec![0; n],
             cost,
-        }
+        };
+        st.refresh(inst, 0, n);
+        st
     }
 
-    fn reindex(&mut self, from: usize, to: usize) {
+    /// Recomputes the slot and the entry/exit points of array indices `from..to` after a change there.
+    pub fn refresh(&mut self, inst: &Inst<'_>, from: usize, to: usize) {
         for k in from..to {
-            self.pos[self.order[k]] = k + 1;
+            let v = self.order[k];
+            let t = inst.opt(v, self.opt[k]);
+            self.pos[v] = k + 1;
+            self.ent[k] = t.entry;
+            self.ext[k] = t.exit;
         }
     }
 }
@@ -196,8 +207,10 @@ impl WorkQueue {
 /// Neighbour lists and move machinery over one problem, with the work meter.
 pub(crate) struct Search<'p, 'b> {
     pub inst: Inst<'p>,
-    /// Flattened neighbour lists: `kn` pseudo nodes per pseudo node (nodes 0..n, depot n).
+    /// Flattened neighbour lists: `kn` pseudo nodes per pseudo node (nodes 0..n, depot n), nearest first.
     nb: Vec<usize>,
+    /// Node-to-node distance of each entry of `nb`, metres.
+    nbd: Vec<f64>,
     kn: usize,
     max_chain: usize,
     pub meter: Meter<'b>,
@@ -205,10 +218,11 @@ pub(crate) struct Search<'p, 'b> {
 
 impl<'p, 'b> Search<'p, 'b> {
     pub fn new(inst: Inst<'p>, params: &TwoOptParams, meter: Meter<'b>) -> Self {
-        let (nb, kn) = neighbour_lists(&inst, params.neighbours.max(1));
+        let (nb, nbd, kn) = neighbour_lists(&inst, params.neighbours.max(1));
         Self {
             inst,
             nb,
+            nbd,
             kn,
             max_chain: params.max_chain.max(1),
             meter,
@@ -250,12 +264,12 @@ impl<'p, 'b> Search<'p, 'b> {
 
     #[inline]
     fn entry(&self, st: &State, s: usize) -> usize {
-        self.inst.opt(st.order[s - 1], st.opt[s - 1]).entry
+        st.ent[s - 1]
     }
 
     #[inline]
     fn exit(&self, st: &State, s: usize) -> usize {
-        self.inst.opt(st.order[s - 1], st.opt[s - 1]).exit
+        st.ext[s - 1]
     }
 
     /// Point the tour leaves slot `s` from (0 ≤ s ≤ n).
@@ -357,24 +371,29 @@ impl<'p, 'b> Search<'p, 'b> {
                 o,
             } => {
                 let len = b - a + 1;
-                let start = if t < a {
-                    st.order[t..b].rotate_right(len);
-                    st.opt[t..b].rotate_right(len);
-                    st.reindex(t, b);
-                    t
+                let (lo, hi, start) = if t < a {
+                    (t, b, t)
                 } else {
-                    st.order[a - 1..t].rotate_left(len);
-                    st.opt[a - 1..t].rotate_left(len);
-                    st.reindex(a - 1, t);
-                    t - len
+                    (a - 1, t, t - len)
                 };
+                if t < a {
+                    st.order[lo..hi].rotate_right(len);
+                    st.opt[lo..hi].rotate_right(len);
+                } else {
+                    st.order[lo..hi].rotate_left(len);
+                    st.opt[lo..hi].rotate_left(len);
+                }
                 if len == 1 {
                     st.opt[start] = o;
                 } else if reversed {
                     self.reverse(st, start, start + len);
                 }
+                st.refresh(&self.inst, lo, hi);
             }
-            Move::Reopt { s, o } => st.opt[s - 1] = o,
+            Move::Reopt { s, o } => {
+                st.opt[s - 1] = o;
+                st.refresh(&self.inst, s - 1, s);
+            }
         }
         st.cost += delta.1 - delta.0;
     }
@@ -386,7 +405,7 @@ impl<'p, 'b> Search<'p, 'b> {
         for k in i..j {
             st.opt[k] = self.inst.opt(st.order[k], st.opt[k]).rev;
         }
-        st.reindex(i, j);
+        st.refresh(&self.inst, i, j);
     }
 
     /// Evaluates the moves that put pseudo node `u` next to one of its neighbours and applies the best
@@ -408,8 +427,24 @@ impl<'p, 'b> Search<'p, 'b> {
         };
         let (us, nu) = self.slots(st, u);
         let reversible = self.inst.reversible;
+        // Positive-gain pruning: a move that adds an edge between u and v must drop one of u's edges, so
+        // only neighbours nearer than u's longer tour edge are worth trying (the lists are sorted).
+        let mut bound = 0.0f64;
+        for &x in &us[..nu] {
+            if x >= 1 {
+                bound = bound.max(self.edge(st, x - 1));
+            }
+            if x <= n {
+                bound = bound.max(self.edge(st, x));
+            }
+        }
+        let row = u * self.kn;
+        let near = self.nbd[row..row + self.kn]
+            .iter()
+            .take_while(|&&d| d < bound)
+            .count();
         'scan: {
-            for idx in (0..self.kn).filter(|_| reversible) {
+            for idx in (0..near).filter(|_| reversible) {
                 let v = self.nb[u * self.kn + idx];
                 let (vs, nv) = self.slots(st, v);
                 for &x in &us[..nu] {
@@ -449,7 +484,7 @@ impl<'p, 'b> Search<'p, 'b> {
                 }
             }
             let mut gaps: Vec<usize> = Vec::with_capacity(4 * self.kn + 1);
-            for idx in 0..self.kn {
+            for idx in 0..near {
                 let v = self.nb[u * self.kn + idx];
                 let (vs, nv) = self.slots(st, v);
                 for &y in &vs[..nv] {
@@ -566,6 +601,7 @@ impl<'p, 'b> Search<'p, 'b> {
                 }
             }
             st.opt = opt;
+            st.refresh(&self.inst, 0, self.inst.n);
             st.cost = cost;
         }
     }
@@ -586,8 +622,8 @@ impl<'p, 'b> Search<'p, 'b> {
 }
 
 /// For every pseudo node (nodes 0..n, depot n) its `k` nearest other pseudo nodes, nearest first (ties by
-/// index). Returns the flattened lists and their common length min(k, n).
-fn neighbour_lists(inst: &Inst<'_>, k: usize) -> (Vec<usize>, usize) {
+/// index). Returns the flattened lists, the matching distances and their common length min(k, n).
+fn neighbour_lists(inst: &Inst<'_>, k: usize) -> (Vec<usize>, Vec<f64>, usize) {
     let n = inst.n;
     let points: Vec<Vec<usize>> = (0..=n)
         .map(|v| {
@@ -604,6 +640,7 @@ fn neighbour_lists(inst: &Inst<'_>, k: usize) -> (Vec<usize>, usize) {
         .collect();
     let kn = k.min(n);
     let mut nb = Vec::with_capacity((n + 1) * kn);
+    let mut nbd = Vec::with_capacity((n + 1) * kn);
     let mut row: Vec<(f64, usize)> = Vec::with_capacity(n + 1);
     let cmp = |x: &(f64, usize), y: &(f64, usize)| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1));
     for a in 0..=n {
@@ -623,6 +660,204 @@ fn neighbour_lists(inst: &Inst<'_>, k: usize) -> (Vec<usize>, usize) {
         }
         row.sort_unstable_by(cmp);
         nb.extend(row.iter().take(kn).map(|&(_, b)| b));
+        nbd.extend(row.iter().take(kn).map(|&(d, _)| d));
     }
-    (nb, kn)
+    (nb, nbd, kn)
+}
+
+#[cfg(test)]
+mod tests {
+    use proptest::prelude::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    use super::super::testutil::{euclid, random_matrix};
+    use super::super::{DistanceMatrix, SolveBudget, TourOption, construct};
+    use super::*;
+
+    /// A random order with random options of `p`.
+    fn random_state(inst: &Inst<'_>, rng: &mut ChaCha8Rng) -> State {
+        let mut order: Vec<usize> = (0..inst.n).collect();
+        for i in (1..order.len()).rev() {
+            order.swap(i, rng.random_range(0..=i));
+        }
+        let opt = order
+            .iter()
+            .map(|&v| rng.random_range(0..inst.k(v)))
+            .collect();
+        State::new(inst, order, opt)
+    }
+
+    /// Every 2-opt, Or-opt and re-option move of a state with n nodes.
+    fn all_moves(inst: &Inst<'_>, st: &State) -> Vec<Move> {
+        let n = inst.n;
+        let mut moves = Vec::new();
+        for i in 0..n {
+            for j in i + 1..=n {
+                moves.push(Move::TwoOpt { i, j });
+            }
+        }
+        for a in 1..=n {
+            for b in a..=(a + 2).min(n) {
+                for t in (0..=n).filter(|&t| t + 1 < a || t > b) {
+                    if a == b {
+                        for o in 0..inst.k(st.order[a - 1]) {
+                            moves.push(Move::OrOpt {
+                                a,
+                                b,
+                                t,
+                                reversed: false,
+                                o,
+                            });
+                        }
+                    } else {
+                        for reversed in [false, true] {
+                            moves.push(Move::OrOpt {
+                                a,
+                                b,
+                                t,
+                                reversed,
+                                o: 0,
+                            });
+                        }
+                    }
+                }
+            }
+            for o in 0..inst.k(st.order[a - 1]) {
+                moves.push(Move::Reopt { s: a, o });
+            }
+        }
+        moves
+    }
+
+    fn full(p: &TourProblem) -> TwoOptParams {
+        TwoOptParams {
+            neighbours: p.nodes.len() + 1,
+            ..TwoOptParams::default()
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(48))]
+
+        /// The O(1) delta of every move equals the change of the exact cost, and `apply` keeps the cached
+        /// points, slots and tracked cost consistent.
+        #[test]
+        fn deltas_match_exact_costs(n in 1usize..9, k in 1usize..=4, closed: bool, metric: bool, seed: u64) {
+            let p = if metric { euclid(n, k, closed, seed) } else { random_matrix(n, k, closed, seed) };
+            let inst = Inst::new(&p);
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            let st = random_state(&inst, &mut rng);
+            let budget = SolveBudget::unlimited();
+            let search = Search::new(Inst::new(&p), &full(&p), Meter::new(&budget));
+            let mut queue = WorkQueue::new(n);
+            for mv in all_moves(&inst, &st) {
+                let mut after = st.clone();
+                let delta = search.delta(&st, mv);
+                search.apply(&mut after, mv, delta, &mut queue);
+                let exact = inst.eval(&after.order, &after.opt);
+                prop_assert!((after.cost - exact).abs() <= 1e-9 * exact.max(1.0), "{mv:?}: {} vs {exact}", after.cost);
+                let fresh = State::new(&inst, after.order.clone(), after.opt.clone());
+                prop_assert_eq!(&fresh.pos, &after.pos);
+                prop_assert_eq!((&fresh.ent, &fresh.ext), (&after.ent, &after.ext));
+                let mut seen = after.order.clone();
+                seen.sort_unstable();
+                prop_assert_eq!(seen, (0..n).collect::<Vec<_>>());
+            }
+        }
+
+        /// 2-opt never returns a tour longer than its construction, for any neighbour-list size.
+        #[test]
+        fn never_lengthens_the_initial_tour(
+            n in 0usize..60, k in 1usize..=4, closed: bool, metric: bool, seed: u64,
+            neighbours in prop::sample::select(vec![1usize, 3, 8, 16, 100]), insertion: bool,
+        ) {
+            let p = if metric { euclid(n, k, closed, seed) } else { random_matrix(n, k, closed, seed) };
+            let construction = if insertion { Construction::CheapestInsertion } else { Construction::NearestNeighbour };
+            let params = TwoOptParams { construction, neighbours, max_chain: 3 };
+            let initial = construct(&p, construction);
+            for budget in [SolveBudget::new(0), SolveBudget::new(97), SolveBudget::new(2_000), SolveBudget::unlimited()] {
+                let t = TwoOpt { params }.solve(&p, seed, &budget);
+                prop_assert_eq!(t.check(&p), Ok(()));
+                prop_assert!(t.cost <= initial.cost, "{} > {}", t.cost, initial.cost);
+            }
+        }
+    }
+
+    #[test]
+    fn neighbour_lists_are_sorted_and_bounded() {
+        let p = euclid(40, 4, true, 3);
+        let inst = Inst::new(&p);
+        let (nb, nbd, kn) = neighbour_lists(&inst, 8);
+        assert_eq!((kn, nb.len(), nbd.len()), (8, 41 * 8, 41 * 8));
+        for v in 0..=40 {
+            let row = &nb[v * kn..(v + 1) * kn];
+            assert!(!row.contains(&v));
+            assert!(nbd[v * kn..(v + 1) * kn].windows(2).all(|w| w[0] <= w[1]));
+        }
+        // With k ≥ n every other pseudo node is listed.
+        let (nb, _, kn) = neighbour_lists(&inst, 100);
+        assert_eq!(kn, 40);
+        let mut row = nb[..kn].to_vec();
+        row.sort_unstable();
+        assert_eq!(row, (1..=40).collect::<Vec<_>>());
+    }
+
+    #[test]
+    fn one_way_options_skip_reversals_but_still_improve() {
+        // Lanes that may only be driven one way (reverse = itself, entry ≠ exit) fail validation; the solver
+        // still returns a valid tour no worse than its construction, without reversing any of them.
+        let mut p = euclid(30, 2, true, 17);
+        for node in &mut p.nodes {
+            let first = node[0];
+            *node = vec![TourOption {
+                reverse: 0,
+                ..first
+            }];
+        }
+        let inst = Inst::new(&p);
+        assert!(!inst.reversible, "the instance has one-way lanes");
+        let initial = construct(&p, Construction::NearestNeighbour);
+        let t = TwoOpt::default().solve(&p, 0, &SolveBudget::unlimited());
+        assert_eq!(t.check(&p), Ok(()));
+        assert!(t.cost <= initial.cost);
+    }
+
+    #[test]
+    fn complete_lists_reach_a_two_opt_optimum_on_a_circle() {
+        // Points on a circle, visited in a scrambled order: the optimum is the circle itself.
+        let n = 24;
+        let pts: Vec<(f64, f64)> = (0..=n)
+            .map(|i| {
+                let a = (i * 7 % (n + 1)) as f64 / (n + 1) as f64 * std::f64::consts::TAU;
+                (10.0 * a.cos(), 10.0 * a.sin())
+            })
+            .collect();
+        let dist = DistanceMatrix::from_fn(n + 1, |i, j| {
+            (pts[i].0 - pts[j].0).hypot(pts[i].1 - pts[j].1)
+        });
+        let nodes = (1..=n)
+            .map(|q| {
+                vec![TourOption {
+                    entry: q,
+                    exit: q,
+                    cost: 0.0,
+                    reverse: 0,
+                }]
+            })
+            .collect();
+        let p = TourProblem {
+            dist,
+            depot: 0,
+            nodes,
+            closed: true,
+        };
+        let perimeter = 2.0 * (n + 1) as f64 * 10.0 * (std::f64::consts::PI / (n + 1) as f64).sin();
+        let t = TwoOpt::default().solve(&p, 0, &SolveBudget::unlimited());
+        assert!(
+            (t.cost - perimeter).abs() < 1e-6,
+            "{} vs {perimeter}",
+            t.cost
+        );
+    }
 }
