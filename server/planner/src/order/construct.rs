@@ -40,10 +40,11 @@ fn nearest_neighbour(inst: &Inst<'_>) -> Vec<usize> {
     for _ in 0..n {
         // (score, node, exit point); ties go to the lowest node and option index.
         let mut best: Option<(f64, usize, usize)> = None;
+        let row = inst.row(at);
         for v in (0..n).filter(|&v| !visited[v]) {
             for o in 0..inst.k(v) {
                 let t = inst.opt(v, o);
-                let score = inst.d(at, t.entry) + t.cost;
+                let score = Inst::d_row(row, t.entry) + t.cost;
                 if best.is_none_or(|b| score.total_cmp(&b.0).is_lt()) {
                     best = Some((score, v, t.exit));
                 }

@@ -89,6 +89,11 @@ impl DistanceMatrix {
         }
     }
 
+    /// Distances from point `i` to every point (row `i`), metres; `None` when `i` is outside the matrix.
+    pub fn row(&self, i: usize) -> Option<&[f64]> {
+        (i < self.n).then(|| &self.data[i * self.n..(i + 1) * self.n])
+    }
+
     /// Sets the distance between points `i` and `j` (both (i, j) and (j, i)), metres. Indices outside the
     /// matrix are ignored (check them against [`DistanceMatrix::len`]).
     pub fn set(&mut self, i: usize, j: usize, d: f64) {
@@ -201,7 +206,8 @@ impl TourProblem {
                         <= REVERSE_COST_TOL * r.cost.abs().max(o.cost.abs()).max(1.0);
                 if r.entry != o.exit || r.exit != o.entry || !same_cost || r.reverse != k {
                     return bad(format!(
-                        "node {v} option {k}: option {} is not its reverse (needs entry {}, exit {}, cost {}, reverse {k})",
+                        "node {v} option {k}: option {} is not its reverse \
+                         (needs entry {}, exit {}, cost {}, reverse {k})",
                         o.reverse, o.exit, o.entry, o.cost
                     ));
                 }
@@ -540,7 +546,7 @@ pub(crate) struct Inst<'p> {
     opts: Vec<Opt>,
 }
 
-fn clamp(x: f64) -> f64 {
+pub(crate) fn clamp(x: f64) -> f64 {
     if x.abs() <= BIG { x } else { BIG }
 }
 
@@ -599,6 +605,18 @@ impl<'p> Inst<'p> {
     #[inline]
     pub fn d(&self, a: usize, b: usize) -> f64 {
         clamp(self.dist.get(a, b))
+    }
+
+    /// Clamped distance from point `a` to point `b` read from a row of the matrix (`None` = `a` outside).
+    #[inline]
+    pub fn d_row(row: Option<&[f64]>, b: usize) -> f64 {
+        row.and_then(|r| r.get(b)).map_or(BIG, |&x| clamp(x))
+    }
+
+    /// Row `a` of the distance matrix, if `a` is a point of it.
+    #[inline]
+    pub fn row(&self, a: usize) -> Option<&'p [f64]> {
+        self.dist.row(a)
     }
 
     /// Number of options of `node`.
@@ -729,8 +747,9 @@ pub(crate) mod testutil {
     use super::{DistanceMatrix, TourOption, TourProblem, best_options};
 
     /// A random Euclidean instance in a 100 m square: point 0 is the depot; every node is a point (one
-    /// option, entry = exit), a lane (two options, both directions), a rectangle (four options: two
-    /// diagonals, both directions) or a lane with a loop option (three options), up to `max_options`.
+    /// option, entry = exit, cost 0), a lane (two options, both directions, cost = its length), a lane with
+    /// a there-and-back option (three options, the loop costs twice the lane) or a rectangle swept with a
+    /// 1 m tool (four options: two diagonals, both directions, cost ≈ its area), up to `max_options`.
     pub fn euclid(n: usize, max_options: usize, closed: bool, seed: u64) -> TourProblem {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let mut pts: Vec<(f64, f64)> =
@@ -744,7 +763,7 @@ pub(crate) mod testutil {
             let c = (rng.random_range(0.0..100.0), rng.random_range(0.0..100.0));
             let kind = rng.random_range(0..max_options.clamp(1, 4));
             let (w, h) = (rng.random_range(0.5..8.0), rng.random_range(0.5..8.0));
-            let inner = rng.random_range(0.0..20.0);
+            let area = w * h;
             let opt = |entry, exit, cost, reverse| TourOption {
                 entry,
                 exit,
@@ -754,28 +773,25 @@ pub(crate) mod testutil {
             let node = match kind {
                 0 => {
                     let p = add(&mut pts, c);
-                    vec![opt(p, p, inner, 0)]
+                    vec![opt(p, p, 0.0, 0)]
                 }
                 1 => {
                     let a = add(&mut pts, c);
                     let b = add(&mut pts, (c.0 + w, c.1 + h));
-                    vec![opt(a, b, inner, 1), opt(b, a, inner, 0)]
+                    let len = w.hypot(h);
+                    vec![opt(a, b, len, 1), opt(b, a, len, 0)]
                 }
                 2 => {
                     let a = add(&mut pts, c);
                     let b = add(&mut pts, (c.0 + w, c.1));
-                    vec![
-                        opt(a, b, inner, 1),
-                        opt(b, a, inner, 0),
-                        opt(a, a, inner * 1.5, 2),
-                    ]
+                    vec![opt(a, b, w, 1), opt(b, a, w, 0), opt(a, a, 2.0 * w, 2)]
                 }
                 _ => {
                     let c0 = add(&mut pts, c);
                     let c1 = add(&mut pts, (c.0 + w, c.1));
                     let c2 = add(&mut pts, (c.0 + w, c.1 + h));
                     let c3 = add(&mut pts, (c.0, c.1 + h));
-                    let other = inner * rng.random_range(0.8..1.2);
+                    let (inner, other) = (area, area * rng.random_range(0.8..1.2));
                     vec![
                         opt(c0, c2, inner, 1),
                         opt(c2, c0, inner, 0),
@@ -1278,7 +1294,9 @@ mod tests {
         #![proptest_config(ProptestConfig::with_cases(64))]
 
         #[test]
-        fn best_options_equals_brute_force(n in 0usize..6, k in 1usize..=4, closed: bool, seed: u64, metric: bool) {
+        fn best_options_equals_brute_force(
+            n in 0usize..6, k in 1usize..=4, closed: bool, seed: u64, metric: bool,
+        ) {
             let p = if metric { euclid(n, k, closed, seed) } else { random_matrix(n, k, closed, seed) };
             let order: Vec<usize> = (0..n).rev().collect();
             let (options, cost) = best_options(&p, &order);

@@ -172,7 +172,8 @@ mod tests {
             let p = if metric { euclid(n, k, closed, seed) } else { random_matrix(n, k, closed, seed) };
             let budget = SolveBudget::new(max_iterations);
             let base = TwoOpt::default().solve(&p, seed, &budget);
-            for t in [RecordToRecord::default().solve(&p, seed, &budget), Anneal::default().solve(&p, seed, &budget)] {
+            let rrt = RecordToRecord::default().solve(&p, seed, &budget);
+            for t in [rrt, Anneal::default().solve(&p, seed, &budget)] {
                 prop_assert_eq!(t.check(&p), Ok(()));
                 prop_assert!(t.cost <= base.cost, "{} > {}", t.cost, base.cost);
             }

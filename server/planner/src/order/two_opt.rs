@@ -14,17 +14,27 @@
 //! by point distance (the least distance between any entry/exit point of one and any of the other). Moves
 //! that create an edge between a node and one of its neighbours are tried, only for neighbours nearer than
 //! the node's longer tour edge (positive-gain pruning: the new edge must be paid for by one of the node's
-//! own edges); the best improving one for that node is applied (first improvement over nodes, best over that node's candidates) and the nodes at the
-//! changed edges are queued again ("don't-look bits"). When the queue is empty the exact option assignment
-//! ([`super::best_options`], O(n·k²)) is run on the order; if it improves, the nodes whose option changed
-//! are queued and the search resumes, until neither improves.
+//! own edges). The best improving move for a node is applied (first improvement over nodes, best over
+//! the node's candidates) and the nodes at the changed edges are queued again ("don't-look bits"). When
+//! the queue is empty the exact option assignment ([`super::best_options`], O(n·k²)) is run on the
+//! order; if it improves, the nodes whose option changed are queued and the search resumes, until
+//! neither improves.
 //!
-//! Complexity, for n nodes, k options per node, K neighbours and chains up to 3: building the neighbour
-//! lists is O(n²·m²) once (m ≤ 2k distinct points per node; we only have a distance matrix, no coordinates);
-//! examining one node is O(K·k) move evaluations; applying a move is O(length moved) array work. A pass
-//! over all nodes is therefore O(n·K·k) evaluations plus one O(n·k²) assignment, not O(n²)·DP.
+//! Complexity, for n nodes, k options per node, K neighbours and chains up to 3:
+//! - construction O(n²·k) (nearest neighbour; see [`super::Construction`]);
+//! - neighbour lists O(n²·m²) once, m ≤ 2k distinct points per node — we only have a distance matrix,
+//!   no coordinates, so every pair is looked at once (matrix rows are read front to back);
+//! - examining one node: O(K·(k + 4)) move evaluations of O(1) each, fewer after pruning; applying a
+//!   move: O(length moved) array work;
+//! - a pass over all nodes: O(n·K·k) evaluations plus one O(n·k²) assignment — not O(n²)·DP. Memory is
+//!   O(n·K) besides the caller's matrix.
+//!
+//! Measured (2-core machine, random Euclidean, ≤ 4 options per node): 200 nodes in under 10 ms,
+//! 1000 in ~0.2 s, 3000 in ~1 s, of which construction and neighbour lists take about half.
+//!
 //! The result is never longer than the initial tour: every applied move and every accepted assignment
-//! strictly lowers the cost, and a final check falls back to the initial tour if rounding ever said otherwise.
+//! strictly lowers the cost, and a final check falls back to the initial tour if rounding ever said
+//! otherwise.
 
 use std::collections::VecDeque;
 
@@ -157,7 +167,8 @@ impl State {
 pub(crate) enum Move {
     /// Reverse slots i+1..=j (0 ≤ i < j ≤ n).
     TwoOpt { i: usize, j: usize },
-    /// Move slots a..=b (1 ≤ a ≤ b ≤ n) into the gap after slot t (t ≤ n, t ∉ a−1..=b), reversed or not;
+    /// Move slots a..=b (1 ≤ a ≤ b ≤ n) into the gap after slot t (t ≤ n, t ∉ a−1..=b), reversed
+    /// or not;
     /// a single node (a = b) takes option `o`.
     OrOpt {
         a: usize,
@@ -625,35 +636,47 @@ impl<'p, 'b> Search<'p, 'b> {
 /// index). Returns the flattened lists, the matching distances and their common length min(k, n).
 fn neighbour_lists(inst: &Inst<'_>, k: usize) -> (Vec<usize>, Vec<f64>, usize) {
     let n = inst.n;
-    let points: Vec<Vec<usize>> = (0..=n)
-        .map(|v| {
-            if v == n {
-                return vec![inst.depot];
-            }
-            let mut p: Vec<usize> = (0..inst.k(v))
+    // Distinct entry/exit points of every pseudo node, flattened: points[first[v]..first[v + 1]].
+    let mut first = Vec::with_capacity(n + 2);
+    let mut points = Vec::new();
+    for v in 0..=n {
+        first.push(points.len());
+        let mut p: Vec<usize> = if v == n {
+            vec![inst.depot]
+        } else {
+            (0..inst.k(v))
                 .flat_map(|o| [inst.opt(v, o).entry, inst.opt(v, o).exit])
-                .collect();
-            p.sort_unstable();
-            p.dedup();
-            p
-        })
-        .collect();
+                .collect()
+        };
+        p.sort_unstable();
+        p.dedup();
+        points.extend(p);
+    }
+    first.push(points.len());
     let kn = k.min(n);
     let mut nb = Vec::with_capacity((n + 1) * kn);
     let mut nbd = Vec::with_capacity((n + 1) * kn);
+    let mut near = vec![f64::INFINITY; n + 1];
     let mut row: Vec<(f64, usize)> = Vec::with_capacity(n + 1);
     let cmp = |x: &(f64, usize), y: &(f64, usize)| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1));
     for a in 0..=n {
-        row.clear();
-        for b in (0..=n).filter(|&b| b != a) {
-            let mut d = f64::INFINITY;
-            for &p in &points[a] {
-                for &q in &points[b] {
-                    d = d.min(inst.d(p, q));
+        near.fill(f64::INFINITY);
+        // One matrix row per point of `a`, read front to back.
+        for &p in &points[first[a]..first[a + 1]] {
+            let dist = inst.row(p);
+            for (b, best) in near.iter_mut().enumerate() {
+                for &q in &points[first[b]..first[b + 1]] {
+                    *best = best.min(Inst::d_row(dist, q));
                 }
             }
-            row.push((d, b));
         }
+        row.clear();
+        row.extend(
+            near.iter()
+                .enumerate()
+                .filter(|&(b, _)| b != a)
+                .map(|(b, &d)| (d, b)),
+        );
         if kn < row.len() && kn > 0 {
             row.select_nth_unstable_by(kn - 1, cmp);
             row.truncate(kn);
@@ -756,7 +779,8 @@ mod tests {
                 let delta = search.delta(&st, mv);
                 search.apply(&mut after, mv, delta, &mut queue);
                 let exact = inst.eval(&after.order, &after.opt);
-                prop_assert!((after.cost - exact).abs() <= 1e-9 * exact.max(1.0), "{mv:?}: {} vs {exact}", after.cost);
+                let tracked = after.cost;
+                prop_assert!((tracked - exact).abs() <= 1e-9 * exact.max(1.0), "{mv:?}: {tracked} vs {exact}");
                 let fresh = State::new(&inst, after.order.clone(), after.opt.clone());
                 prop_assert_eq!(&fresh.pos, &after.pos);
                 prop_assert_eq!((&fresh.ent, &fresh.ext), (&after.ent, &after.ext));
@@ -773,10 +797,12 @@ mod tests {
             neighbours in prop::sample::select(vec![1usize, 3, 8, 16, 100]), insertion: bool,
         ) {
             let p = if metric { euclid(n, k, closed, seed) } else { random_matrix(n, k, closed, seed) };
-            let construction = if insertion { Construction::CheapestInsertion } else { Construction::NearestNeighbour };
+            let construction =
+                if insertion { Construction::CheapestInsertion } else { Construction::NearestNeighbour };
             let params = TwoOptParams { construction, neighbours, max_chain: 3 };
             let initial = construct(&p, construction);
-            for budget in [SolveBudget::new(0), SolveBudget::new(97), SolveBudget::new(2_000), SolveBudget::unlimited()] {
+            let budgets = [0, 97, 2_000, u64::MAX].map(SolveBudget::new);
+            for budget in budgets {
                 let t = TwoOpt { params }.solve(&p, seed, &budget);
                 prop_assert_eq!(t.check(&p), Ok(()));
                 prop_assert!(t.cost <= initial.cost, "{} > {}", t.cost, initial.cost);
