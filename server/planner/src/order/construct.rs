@@ -10,8 +10,8 @@ pub enum Construction {
     /// (distance to its entry plus its inner cost). O(n²·k).
     #[default]
     NearestNeighbour,
-    /// Repeatedly insert the node, option and position that lengthen the partial tour least. O(n²·k) expected
-    /// (a node rescans the whole tour only when the gap it wanted was split).
+    /// Repeatedly insert the node, option and position that lengthen the partial tour least. O(n²·k)
+    /// expected: every node remembers its few best gaps and rescans the tour only when they are used up.
     CheapestInsertion,
 }
 
@@ -58,6 +58,33 @@ fn nearest_neighbour(inst: &Inst<'_>) -> Vec<usize> {
     order
 }
 
+/// Insertion candidates a node remembers between full rescans of the tour.
+const KEEP: usize = 8;
+
+/// An insertion candidate: (added cost in metres, gap = the pseudo node it follows, option).
+type Cand = (f64, usize, usize);
+
+/// A gap of the partial tour, ready to price insertions (see `cheapest_insertion`).
+struct Gap<'m> {
+    /// The pseudo node the gap follows.
+    x: usize,
+    /// Matrix row of the point the gap starts at.
+    from: Option<&'m [f64]>,
+    /// Matrix row of the point it ends at; `None` for the open end of an open tour.
+    to: Option<Option<&'m [f64]>>,
+    /// Its current length, metres.
+    old: f64,
+}
+
+fn by_cost(a: &Cand, b: &Cand) -> std::cmp::Ordering {
+    a.0.total_cmp(&b.0).then(a.1.cmp(&b.1))
+}
+
+/// Cheapest insertion. Every uninserted node keeps its `KEEP` best gaps and `floor`, a lower bound on
+/// the cost of every gap it does not list. Gaps never change cost while they exist, so while the best
+/// listed gap is no dearer than `floor` it is the node's best; only otherwise is the whole tour rescanned.
+/// Each insertion offers the two new gaps to every node (O(n·k)), so the total is O(n²·k) plus the
+/// rare rescans (O(n·k) each).
 fn cheapest_insertion(inst: &Inst<'_>) -> Vec<usize> {
     let n = inst.n;
     let depot = n; // pseudo node: the tour's start
@@ -65,74 +92,99 @@ fn cheapest_insertion(inst: &Inst<'_>) -> Vec<usize> {
     let mut next = vec![end; n + 1];
     let mut chosen = vec![0usize; n];
     let mut inserted = vec![false; n];
-    let out = |x: usize, chosen: &[usize]| {
-        if x == depot {
+    // The gap after pseudo node `x`: where it starts, where it ends (None: the open end), the matrix rows
+    // of both (so that offering it to every node reads two cached rows), and its current length.
+    let gap = |x: usize, next: &[usize], chosen: &[usize]| -> Gap<'_> {
+        let from = if x == depot {
             inst.depot
         } else {
             inst.opt(x, chosen[x]).exit
-        }
-    };
-    let gap_cost = |x: usize, v: usize, o: usize, next: &[usize], chosen: &[usize]| -> f64 {
-        let from = out(x, chosen);
+        };
         let y = next[x];
-        let t = inst.opt(v, o);
         let to = if y == end {
             inst.closed.then_some(inst.depot)
         } else {
             Some(inst.opt(y, chosen[y]).entry)
         };
-        let (into_y, old) = match to {
-            Some(p) => (inst.d(t.exit, p), inst.d(from, p)),
-            None => (0.0, 0.0),
-        };
-        inst.d(from, t.entry) + t.cost + into_y - old
+        Gap {
+            x,
+            from: inst.row(from),
+            to: to.map(|p| inst.row(p)),
+            old: to.map_or(0.0, |p| inst.d(from, p)),
+        }
     };
-    // best[v] = (insertion cost, gap after this pseudo node, option)
-    let scan = |v: usize, next: &[usize], chosen: &[usize]| -> (f64, usize, usize) {
-        let mut best = (f64::INFINITY, depot, 0usize);
-        let mut first = true;
+    // Cheapest way to put `u` into gap `g`.
+    let gap_cost = |g: &Gap<'_>, u: usize| -> Cand {
+        let mut best: Option<Cand> = None;
+        for o in 0..inst.k(u) {
+            let t = inst.opt(u, o);
+            let into_y = g.to.map_or(0.0, |row| Inst::d_row(row, t.exit));
+            let c = (
+                Inst::d_row(g.from, t.entry) + t.cost + into_y - g.old,
+                g.x,
+                o,
+            );
+            if best.is_none_or(|b| by_cost(&c, &b).is_lt()) {
+                best = Some(c);
+            }
+        }
+        best.unwrap_or((f64::INFINITY, g.x, 0))
+    };
+    let rescan = |u: usize, next: &[usize], chosen: &[usize], list: &mut Vec<Cand>| -> f64 {
+        let mut all = Vec::new();
         let mut x = depot;
         loop {
-            for o in 0..inst.k(v) {
-                let c = gap_cost(x, v, o, next, chosen);
-                if first || c.total_cmp(&best.0).is_lt() {
-                    best = (c, x, o);
-                    first = false;
-                }
-            }
+            all.push(gap_cost(&gap(x, next, chosen), u));
             if next[x] == end {
                 break;
             }
             x = next[x];
         }
-        best
+        all.sort_unstable_by(by_cost);
+        list.clear();
+        list.extend(all.iter().take(KEEP));
+        all.get(KEEP).map_or(f64::INFINITY, |c| c.0)
     };
-    let mut best: Vec<(f64, usize, usize)> = (0..n).map(|v| scan(v, &next, &chosen)).collect();
+    let mut lists: Vec<Vec<Cand>> = vec![Vec::with_capacity(KEEP); n];
+    let mut floor = vec![f64::INFINITY; n];
+    for u in 0..n {
+        floor[u] = rescan(u, &next, &chosen, &mut lists[u]);
+    }
+    let best_of = |list: &[Cand]| list.iter().copied().min_by(by_cost);
     for _ in 0..n {
         let pick = (0..n)
-            .filter(|&v| !inserted[v])
-            .min_by(|&a, &b| best[a].0.total_cmp(&best[b].0).then(a.cmp(&b)));
-        let Some(v) = pick else { break };
-        let (_, x, o) = best[v];
+            .filter(|&u| !inserted[u])
+            .filter_map(|u| best_of(&lists[u]).map(|c| (c, u)))
+            .min_by(|a, b| by_cost(&a.0, &b.0).then(a.1.cmp(&b.1)));
+        let Some(((_, x, o), v)) = pick else { break };
         inserted[v] = true;
         chosen[v] = o;
         next[v] = next[x];
         next[x] = v;
+        let new_gaps = [gap(x, &next, &chosen), gap(v, &next, &chosen)];
         for u in 0..n {
             if inserted[u] {
                 continue;
             }
-            if best[u].1 == x {
-                best[u] = scan(u, &next, &chosen);
-                continue;
-            }
-            for g in [x, v] {
-                for o in 0..inst.k(u) {
-                    let c = gap_cost(g, u, o, &next, &chosen);
-                    if c.total_cmp(&best[u].0).is_lt() {
-                        best[u] = (c, g, o);
-                    }
+            let list = &mut lists[u];
+            list.retain(|c| c.1 != x); // the gap after x was split
+            for g in &new_gaps {
+                let c = gap_cost(g, u);
+                if list.len() < KEEP {
+                    list.push(c);
+                    continue;
                 }
+                let worst = (0..list.len()).max_by(|&i, &j| by_cost(&list[i], &list[j]));
+                match worst {
+                    Some(w) if by_cost(&c, &list[w]).is_lt() => {
+                        floor[u] = floor[u].min(list[w].0);
+                        list[w] = c;
+                    }
+                    _ => floor[u] = floor[u].min(c.0),
+                }
+            }
+            if best_of(list).is_none_or(|b| b.0 > floor[u]) {
+                floor[u] = rescan(u, &next, &chosen, list);
             }
         }
     }
@@ -165,6 +217,60 @@ mod tests {
                     assert_eq!(t.cost, super::super::tour_cost(&p, &t.order, &t.options));
                 }
             }
+        }
+    }
+
+    /// The textbook O(n³) cheapest insertion: rescan every gap for every node at every step.
+    fn naive_cheapest_insertion(p: &TourProblem) -> Vec<usize> {
+        let inst = Inst::new(p);
+        let mut tour: Vec<(usize, usize)> = Vec::new(); // (node, option)
+        let mut left: Vec<usize> = (0..inst.n).collect();
+        let point_after = |tour: &[(usize, usize)], g: usize| {
+            if g == 0 {
+                inst.depot
+            } else {
+                inst.opt(tour[g - 1].0, tour[g - 1].1).exit
+            }
+        };
+        while !left.is_empty() {
+            let mut best: Option<(f64, usize, usize, usize)> = None; // (cost, gap, node, option)
+            for &u in &left {
+                for g in 0..=tour.len() {
+                    let from = point_after(&tour, g);
+                    let to = match tour.get(g) {
+                        Some(&(y, o)) => Some(inst.opt(y, o).entry),
+                        None => inst.closed.then_some(inst.depot),
+                    };
+                    for o in 0..inst.k(u) {
+                        let t = inst.opt(u, o);
+                        let (into, old) =
+                            to.map_or((0.0, 0.0), |q| (inst.d(t.exit, q), inst.d(from, q)));
+                        let c = inst.d(from, t.entry) + t.cost + into - old;
+                        if best.is_none_or(|b| c < b.0) {
+                            best = Some((c, g, u, o));
+                        }
+                    }
+                }
+            }
+            let Some((_, g, u, o)) = best else { break };
+            tour.insert(g, (u, o));
+            left.retain(|&x| x != u);
+        }
+        tour.into_iter().map(|(v, _)| v).collect()
+    }
+
+    #[test]
+    fn cheapest_insertion_matches_the_textbook_version() {
+        for seed in 0..20 {
+            let p = euclid(5 + 3 * seed as usize, 4, seed % 2 == 0, seed);
+            let fast = construct(&p, Construction::CheapestInsertion);
+            let naive = naive_cheapest_insertion(&p);
+            let (_, naive_cost) = super::super::best_options(&p, &naive);
+            assert!(
+                (fast.cost - naive_cost).abs() < 1e-9,
+                "seed {seed}: {} vs {naive_cost}",
+                fast.cost
+            );
         }
     }
 
