@@ -13,6 +13,7 @@ pub mod error;
 pub mod geom;
 pub mod map;
 pub mod metrics;
+pub mod order;
 pub mod pattern;
 pub mod space;
 
