@@ -1,1 +1,197 @@
-fn main(){}
+//! `shiftd`: the SHIFT daemon's command line.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use clap::{Parser, Subcommand};
+use shift_planner::decompose::DecompositionMethod;
+use shift_planner::geom::Point2;
+use shift_planner::order::OrderMethod;
+use shift_planner::pattern::PatternMethod;
+use shift_planner::pipeline::{NoMonitor, PlanParams, plan};
+use shift_planner::space::{CoverageSpace, RobotShape};
+use shiftd::eval::{TABLE_HEADER, run_eval, table_line};
+use shiftd::plan_doc::to_document;
+use shiftd::render::render_png;
+use shiftd::scene_io::{load_map, load_scene};
+
+#[derive(Parser)]
+#[command(name = "shiftd", version, about = "SHIFT: coverage planning for robot fleets")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Plan one coverage path and write the plan JSON (DESIGN §5.1).
+    Plan(PlanArgs),
+    /// Evaluate every decomposition × order and the baselines on a folder of scenes.
+    Eval(EvalArgs),
+}
+
+#[derive(clap::Args)]
+struct PlanArgs {
+    /// Scene folder holding scene.json (DESIGN §5.2).
+    #[arg(long, conflicts_with = "map")]
+    scene: Option<PathBuf>,
+    /// map_server YAML (with --start, --robot-radius, --tool-width).
+    #[arg(long)]
+    map: Option<PathBuf>,
+    /// Start / dock position "X,Y" in metres, map frame.
+    #[arg(long, value_parser = parse_xy, allow_hyphen_values = true)]
+    start: Option<Point2>,
+    /// Robot radius, metres.
+    #[arg(long)]
+    robot_radius: Option<f64>,
+    /// Tool width, metres.
+    #[arg(long)]
+    tool_width: Option<f64>,
+    /// Decomposition: bcd, walls, voronoi, grid.
+    #[arg(long, default_value = "bcd")]
+    decomposition: DecompositionMethod,
+    /// Visiting order solver: two-opt, rrt, anneal.
+    #[arg(long, default_value = "two-opt")]
+    order: OrderMethod,
+    /// In-region pattern: lanes, spiral.
+    #[arg(long, default_value = "lanes")]
+    pattern: PatternMethod,
+    /// Seed for every random choice.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Constant speed written into the plan until speed profiles land, m/s.
+    #[arg(long, default_value_t = 0.5)]
+    speed: f64,
+    /// Output file ("-" for stdout).
+    #[arg(long, default_value = "-")]
+    out: PathBuf,
+    /// Also render the plan to this PNG.
+    #[arg(long)]
+    render: Option<PathBuf>,
+}
+
+#[derive(clap::Args)]
+struct EvalArgs {
+    /// Folder of scene folders.
+    #[arg(long)]
+    scenes: PathBuf,
+    /// One JSON object per line instead of a table.
+    #[arg(long)]
+    json: bool,
+    /// Write a PNG per plan into this folder.
+    #[arg(long)]
+    render: Option<PathBuf>,
+}
+
+fn parse_xy(s: &str) -> Result<Point2, String> {
+    let (x, y) = s.split_once(',').ok_or_else(|| format!("expected X,Y, got {s:?}"))?;
+    let x: f64 = x.trim().parse().map_err(|e| format!("bad x in {s:?}: {e}"))?;
+    let y: f64 = y.trim().parse().map_err(|e| format!("bad y in {s:?}: {e}"))?;
+    Ok(Point2::new(x, y))
+}
+
+fn main() -> ExitCode {
+    tracing_subscriber::fmt()
+        .with_env_filter(tracing_subscriber::EnvFilter::from_default_env())
+        .with_writer(std::io::stderr)
+        .init();
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Plan(args) => cmd_plan(args),
+        Command::Eval(args) => cmd_eval(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            // One line: what is wrong and where.
+            eprintln!("error: {e:#}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn cmd_plan(args: PlanArgs) -> Result<()> {
+    if !(args.speed.is_finite() && args.speed > 0.0) {
+        bail!("--speed must be a positive number of m/s, got {}", args.speed);
+    }
+    let (grid, start, robot, mut warnings) = if let Some(dir) = &args.scene {
+        let s = load_scene(dir)?;
+        let robot = RobotShape {
+            radius_m: args.robot_radius.unwrap_or(s.scene.robot_radius),
+            tool_width_m: args.tool_width.unwrap_or(s.scene.tool_width),
+        };
+        let start = args.start.unwrap_or(Point2::new(s.scene.start[0], s.scene.start[1]));
+        (s.map.grid, start, robot, s.map.warnings)
+    } else if let Some(map) = &args.map {
+        let m = load_map(map)?;
+        let start = args.start.context("--start X,Y is required with --map")?;
+        let robot = RobotShape {
+            radius_m: args.robot_radius.context("--robot-radius is required with --map")?,
+            tool_width_m: args.tool_width.context("--tool-width is required with --map")?,
+        };
+        (m.grid, start, robot, m.warnings)
+    } else {
+        bail!("give --scene DIR or --map FILE.yaml");
+    };
+    let t = Instant::now();
+    let space = CoverageSpace::new(grid, robot, start)?;
+    let params = PlanParams {
+        decomposition: args.decomposition,
+        order: args.order,
+        pattern: args.pattern,
+        seed: args.seed,
+        ..PlanParams::default()
+    };
+    let out = plan(&space, &params, &mut NoMonitor)?;
+    let ms = t.elapsed().as_secs_f64() * 1e3;
+    warnings.extend(out.warnings.iter().cloned());
+    for w in &warnings {
+        eprintln!("warning: {w}");
+    }
+    let doc = to_document("p-cli", &out, args.speed, ms);
+    let text = serde_json::to_string_pretty(&doc)?;
+    if args.out.as_os_str() == "-" {
+        println!("{text}");
+    } else {
+        std::fs::write(&args.out, text).with_context(|| format!("writing {}", args.out.display()))?;
+    }
+    if let Some(png) = &args.render {
+        render_png(&space, &out, png, 1200)?;
+    }
+    let m = out.metrics;
+    eprintln!(
+        "coverage {:.2} %  overlap {:.2} %  length {:.1} m  turns {}  collisions {}  regions {}  compute {:.0} ms",
+        m.coverage_pct,
+        m.overlap_pct,
+        m.length_m,
+        m.turns,
+        m.collisions,
+        out.regions.len(),
+        ms
+    );
+    let st = out.stats;
+    eprintln!(
+        "length by purpose: pattern {:.1} m, passes {:.1} m, visits {}, steps {:.1} m, transit {:.1} m",
+        st.pattern_m, st.passes_m, st.visits, st.steps_m, st.transit_m
+    );
+    Ok(())
+}
+
+fn cmd_eval(args: EvalArgs) -> Result<()> {
+    if !args.json {
+        println!("{TABLE_HEADER}");
+    }
+    run_eval(&args.scenes, args.render.as_deref(), |row| {
+        if args.json {
+            match serde_json::to_string(row) {
+                Ok(s) => println!("{s}"),
+                Err(e) => eprintln!("error: {e}"),
+            }
+        } else {
+            println!("{}", table_line(row));
+        }
+    })?;
+    Ok(())
+}

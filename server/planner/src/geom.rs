@@ -64,11 +64,7 @@ pub fn simplify_polyline(
             stack.push((worst, j));
         }
     }
-    points
-        .iter()
-        .zip(keep)
-        .filter_map(|(p, k)| k.then_some(*p))
-        .collect()
+    points.iter().zip(keep).filter_map(|(p, k)| k.then_some(*p)).collect()
 }
 
 #[cfg(test)]
@@ -92,7 +88,10 @@ mod tests {
             .chain((1..=10).map(|i| Point2::new(10.0, f64::from(i))))
             .collect();
         let s = simplify_polyline(&pts, 0.01, &|_, _| true);
-        assert_eq!(s, vec![Point2::new(0.0, 0.0), Point2::new(10.0, 0.0), Point2::new(10.0, 10.0)]);
+        assert_eq!(
+            s,
+            vec![Point2::new(0.0, 0.0), Point2::new(10.0, 0.0), Point2::new(10.0, 10.0)]
+        );
         // A refusing predicate keeps every vertex.
         let all = simplify_polyline(&pts, 0.01, &|_, _| false);
         assert_eq!(all.len(), pts.len());
@@ -101,7 +100,11 @@ mod tests {
     #[test]
     fn heading_change_is_unsigned() {
         let a = direction(0.0);
-        assert!((heading_change(a, direction(std::f64::consts::FRAC_PI_2)) - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
-        assert!((heading_change(a, direction(-std::f64::consts::FRAC_PI_2)) - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+        assert!(
+            (heading_change(a, direction(std::f64::consts::FRAC_PI_2)) - std::f64::consts::FRAC_PI_2).abs() < 1e-12
+        );
+        assert!(
+            (heading_change(a, direction(-std::f64::consts::FRAC_PI_2)) - std::f64::consts::FRAC_PI_2).abs() < 1e-12
+        );
     }
 }

@@ -8,13 +8,17 @@
 //! `decompose` (regions) → `pattern` (lanes, spiral, boundary passes) → `order` (visiting order) →
 //! `link` (transits) → `metrics` (DESIGN §6).
 
+pub mod baseline;
 pub mod decompose;
 pub mod error;
 pub mod geom;
+pub mod link;
 pub mod map;
 pub mod metrics;
 pub mod order;
 pub mod pattern;
+pub mod pipeline;
 pub mod space;
+pub mod testing;
 
 pub use error::{PlannerError, Result};

@@ -27,7 +27,10 @@ impl RobotShape {
     pub fn validate(&self) -> Result<()> {
         for (name, v) in [("robot_radius", self.radius_m), ("tool_width", self.tool_width_m)] {
             if !v.is_finite() || v <= 0.0 {
-                return Err(PlannerError::InvalidParam { name, reason: format!("must be a positive number of metres, got {v}") });
+                return Err(PlannerError::InvalidParam {
+                    name,
+                    reason: format!("must be a positive number of metres, got {v}"),
+                });
             }
         }
         Ok(())
@@ -64,19 +67,37 @@ impl CoverageSpace {
         finite("start x", start.x)?;
         finite("start y", start.y)?;
         let g = grid.geometry;
-        let requested = g.locate(start).ok_or(PlannerError::StartOutsideMap { x: start.x, y: start.y })?;
+        let requested = g
+            .locate(start)
+            .ok_or(PlannerError::StartOutsideMap { x: start.x, y: start.y })?;
         let clearance = DistanceField::compute(g, |i| !grid.is_free(i), true);
         // A hair of tolerance so that a centre exactly robot_radius away counts (floating-point noise).
         let r = robot.radius_m - 1e-9;
         let traversable: Vec<bool> = (0..g.len()).map(|i| grid.is_free(i) && clearance.at(i) >= r).collect();
         let mut warnings = Vec::new();
         let (start_cell, start_pt) = if traversable[g.index(requested)] {
-            (requested, start)
+            // The cell's centre is clear; the exact point may sit a hair closer to a wall than the radius.
+            if clearance.at_point(start) >= r {
+                (requested, start)
+            } else {
+                let p = g.center(requested);
+                warnings.push(format!(
+                    "start ({:.3}, {:.3}) is {:.3} m from an obstacle, under the radius {} m; moved to its cell centre ({:.3}, {:.3})",
+                    start.x, start.y, clearance.at_point(start), robot.radius_m, p.x, p.y
+                ));
+                (requested, p)
+            }
         } else {
             let best = (0..g.len())
                 .filter(|&i| traversable[i])
-                .min_by(|&a, &b| (g.center_of(a) - start).norm().total_cmp(&(g.center_of(b) - start).norm()))
-                .ok_or(PlannerError::NoTraversableSpace { radius_m: robot.radius_m })?;
+                .min_by(|&a, &b| {
+                    (g.center_of(a) - start)
+                        .norm()
+                        .total_cmp(&(g.center_of(b) - start).norm())
+                })
+                .ok_or(PlannerError::NoTraversableSpace {
+                    radius_m: robot.radius_m,
+                })?;
             let c = g.cell(best);
             let p = g.center(c);
             warnings.push(format!(
@@ -93,7 +114,9 @@ impl CoverageSpace {
         let reachable = flood_fill8(&g, &traversable, start_cell);
         let to_reachable = DistanceField::compute(g, |i| reachable[i], false);
         let half = robot.tool_width_m / 2.0 + 1e-9;
-        let coverable = (0..g.len()).map(|i| grid.is_free(i) && to_reachable.at(i) <= half).collect();
+        let coverable = (0..g.len())
+            .map(|i| grid.is_free(i) && to_reachable.at(i) <= half)
+            .collect();
         Ok(Self {
             grid,
             robot,
@@ -183,7 +206,10 @@ mod tests {
 
     #[test]
     fn reach_stops_at_walls_and_coverable_reaches_them() {
-        let robot = RobotShape { radius_m: 0.2, tool_width_m: 0.4 };
+        let robot = RobotShape {
+            radius_m: 0.2,
+            tool_width_m: 0.4,
+        };
         let s = CoverageSpace::new(room(), robot, Point2::new(0.5, 1.0)).expect("ok");
         let g = *s.geometry();
         assert!(s.warnings.is_empty());
@@ -203,7 +229,10 @@ mod tests {
 
     #[test]
     fn start_in_obstacle_snaps_with_warning() {
-        let robot = RobotShape { radius_m: 0.2, tool_width_m: 0.4 };
+        let robot = RobotShape {
+            radius_m: 0.2,
+            tool_width_m: 0.4,
+        };
         let s = CoverageSpace::new(room(), robot, Point2::new(2.0, 1.0)).expect("ok");
         assert_eq!(s.warnings.len(), 1);
         assert!(s.reachable[s.geometry().index(s.start_cell)]);
@@ -212,12 +241,33 @@ mod tests {
 
     #[test]
     fn rejects_bad_requests() {
-        let ok = RobotShape { radius_m: 0.2, tool_width_m: 0.4 };
-        assert!(matches!(CoverageSpace::new(room(), ok, Point2::new(9.0, 1.0)), Err(PlannerError::StartOutsideMap { .. })));
-        assert!(matches!(CoverageSpace::new(room(), ok, Point2::new(f64::NAN, 1.0)), Err(PlannerError::NonFinite { .. })));
-        let bad = RobotShape { radius_m: -0.2, tool_width_m: 0.4 };
-        assert!(matches!(CoverageSpace::new(room(), bad, Point2::new(0.5, 1.0)), Err(PlannerError::InvalidParam { .. })));
-        let huge = RobotShape { radius_m: 5.0, tool_width_m: 0.4 };
-        assert!(matches!(CoverageSpace::new(room(), huge, Point2::new(0.5, 1.0)), Err(PlannerError::NoTraversableSpace { .. })));
+        let ok = RobotShape {
+            radius_m: 0.2,
+            tool_width_m: 0.4,
+        };
+        assert!(matches!(
+            CoverageSpace::new(room(), ok, Point2::new(9.0, 1.0)),
+            Err(PlannerError::StartOutsideMap { .. })
+        ));
+        assert!(matches!(
+            CoverageSpace::new(room(), ok, Point2::new(f64::NAN, 1.0)),
+            Err(PlannerError::NonFinite { .. })
+        ));
+        let bad = RobotShape {
+            radius_m: -0.2,
+            tool_width_m: 0.4,
+        };
+        assert!(matches!(
+            CoverageSpace::new(room(), bad, Point2::new(0.5, 1.0)),
+            Err(PlannerError::InvalidParam { .. })
+        ));
+        let huge = RobotShape {
+            radius_m: 5.0,
+            tool_width_m: 0.4,
+        };
+        assert!(matches!(
+            CoverageSpace::new(room(), huge, Point2::new(0.5, 1.0)),
+            Err(PlannerError::NoTraversableSpace { .. })
+        ));
     }
 }

@@ -28,8 +28,18 @@ impl Decomposer for Boustrophedon {
 /// Runs the sweep; `transpose` sweeps rows instead of columns. Returns labels and the number of cells.
 fn sweep(space: &CoverageSpace, transpose: bool) -> (Vec<u32>, usize) {
     let g = space.geometry();
-    let (lines, len) = if transpose { (g.height, g.width) } else { (g.width, g.height) };
-    let idx = |line: usize, k: usize| if transpose { line * g.width + k } else { k * g.width + line };
+    let (lines, len) = if transpose {
+        (g.height, g.width)
+    } else {
+        (g.width, g.height)
+    };
+    let idx = |line: usize, k: usize| {
+        if transpose {
+            line * g.width + k
+        } else {
+            k * g.width + line
+        }
+    };
     let mut labels = vec![NO_REGION; g.len()];
     let mut next_id = 0u32;
     // Runs of the previous line: (start, end inclusive, cell id).
@@ -90,8 +100,15 @@ mod tests {
         let g = GridGeometry::new(60, 40, 0.1, Point2::origin()).expect("valid");
         let mut grid = OccupancyGrid::filled(g, CellState::Free);
         grid.fill_rect(2.5, 1.5, 3.5, 2.5, CellState::Occupied);
-        let space = CoverageSpace::new(grid, RobotShape { radius_m: 0.15, tool_width_m: 0.3 }, Point2::new(0.5, 0.5))
-            .expect("ok");
+        let space = CoverageSpace::new(
+            grid,
+            RobotShape {
+                radius_m: 0.15,
+                tool_width_m: 0.3,
+            },
+            Point2::new(0.5, 0.5),
+        )
+        .expect("ok");
         let r = decompose(&space, DecompositionMethod::Bcd, &DecomposeParams::default());
         assert_eq!(r.count, 4);
         // Each cell is monotone along the sweep: every column (or row) slice is one run.
@@ -114,8 +131,15 @@ mod tests {
     fn empty_room_is_one_cell() {
         let g = GridGeometry::new(30, 20, 0.1, Point2::origin()).expect("valid");
         let grid = OccupancyGrid::filled(g, CellState::Free);
-        let space = CoverageSpace::new(grid, RobotShape { radius_m: 0.15, tool_width_m: 0.3 }, Point2::new(0.5, 0.5))
-            .expect("ok");
+        let space = CoverageSpace::new(
+            grid,
+            RobotShape {
+                radius_m: 0.15,
+                tool_width_m: 0.3,
+            },
+            Point2::new(0.5, 0.5),
+        )
+        .expect("ok");
         let r = decompose(&space, DecompositionMethod::Bcd, &DecomposeParams::default());
         assert_eq!(r.count, 1);
     }

@@ -21,7 +21,9 @@ impl Decomposer for GridBlocks {
             return vec![NO_REGION; g.len()];
         }
         let min_side_cells = 4.0 * 2.0 * space.robot.radius_m / g.resolution;
-        let side = (params.target_area(space).sqrt() / g.resolution).max(min_side_cells).max(1.0);
+        let side = (params.target_area(space).sqrt() / g.resolution)
+            .max(min_side_cells)
+            .max(1.0);
         // Equal blocks: n parts along each axis, each at least `side` cells.
         let nx = (((x1 - x0 + 1) as f64 / side).floor() as usize).max(1);
         let ny = (((y1 - y0 + 1) as f64 / side).floor() as usize).max(1);

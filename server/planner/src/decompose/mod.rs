@@ -40,7 +40,7 @@ impl Regions {
 }
 
 /// Knobs shared by the decompositions.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct DecomposeParams {
     /// Regions smaller than this (m²) are merged into the neighbour they share the longest border with.
     /// `None`: 4 × tool_width².
@@ -49,12 +49,6 @@ pub struct DecomposeParams {
     pub target_area_m2: Option<f64>,
     /// Seed for strategies with random choices (Voronoi seeds).
     pub seed: u64,
-}
-
-impl Default for DecomposeParams {
-    fn default() -> Self {
-        Self { min_area_m2: None, target_area_m2: None, seed: 0 }
-    }
 }
 
 impl DecomposeParams {
@@ -90,6 +84,8 @@ pub enum DecompositionMethod {
     Voronoi,
     /// Blocks of a regular grid, split into connected pieces (seed 004 §3.3.2).
     Grid,
+    /// No decomposition: the whole reachable set is one region (baselines).
+    Single,
 }
 
 impl DecompositionMethod {
@@ -103,6 +99,7 @@ impl DecompositionMethod {
             Self::Walls => "walls",
             Self::Voronoi => "voronoi",
             Self::Grid => "grid",
+            Self::Single => "none",
         }
     }
 
@@ -113,6 +110,7 @@ impl DecompositionMethod {
             Self::Walls => &walls::WallDivision,
             Self::Voronoi => &voronoi::GeodesicVoronoi,
             Self::Grid => &grid::GridBlocks,
+            Self::Single => &Single,
         }
     }
 }
@@ -122,8 +120,19 @@ impl std::str::FromStr for DecompositionMethod {
     fn from_str(s: &str) -> Result<Self, String> {
         Self::ALL
             .into_iter()
+            .chain([Self::Single])
             .find(|m| m.name() == s)
-            .ok_or_else(|| format!("unknown decomposition {s:?}; expected one of bcd, walls, voronoi, grid"))
+            .ok_or_else(|| format!("unknown decomposition {s:?}; expected one of bcd, walls, voronoi, grid, none"))
+    }
+}
+
+/// The trivial strategy: one region.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Single;
+
+impl Decomposer for Single {
+    fn label(&self, space: &CoverageSpace, _params: &DecomposeParams) -> Vec<u32> {
+        space.reachable.iter().map(|&r| if r { 0 } else { NO_REGION }).collect()
     }
 }
 
@@ -169,7 +178,15 @@ pub fn normalize(space: &CoverageSpace, raw: &[u32], min_cells: usize) -> Region
             continue;
         }
         let c = g.cell(i);
-        for nb in [g.offset(c, 1, 0), g.offset(c, 0, 1), g.offset(c, 1, 1), g.offset(c, -1, 1)].into_iter().flatten() {
+        for nb in [
+            g.offset(c, 1, 0),
+            g.offset(c, 0, 1),
+            g.offset(c, 1, 1),
+            g.offset(c, -1, 1),
+        ]
+        .into_iter()
+        .flatten()
+        {
             let j = g.index(nb);
             let (a, b) = (piece[i], piece[j]);
             if b != NO_REGION && a != b {
@@ -180,13 +197,18 @@ pub fn normalize(space: &CoverageSpace, raw: &[u32], min_cells: usize) -> Region
     }
     let mut parent: Vec<u32> = (0..sizes.len() as u32).collect();
     let mut size = sizes.clone();
-    let mut queue: BTreeSet<(usize, u32)> =
-        (0..sizes.len() as u32).filter(|&p| sizes[p as usize] < min_cells).map(|p| (sizes[p as usize], p)).collect();
+    let mut queue: BTreeSet<(usize, u32)> = (0..sizes.len() as u32)
+        .filter(|&p| sizes[p as usize] < min_cells)
+        .map(|p| (sizes[p as usize], p))
+        .collect();
     while let Some((s, small)) = queue.pop_first() {
         if parent[small as usize] != small || size[small as usize] != s {
             continue;
         }
-        let Some((&into, _)) = adjacency[small as usize].iter().max_by(|a, b| a.1.cmp(b.1).then(b.0.cmp(a.0))) else {
+        let Some((&into, _)) = adjacency[small as usize]
+            .iter()
+            .max_by(|a, b| a.1.cmp(b.1).then(b.0.cmp(a.0)))
+        else {
             continue; // isolated: nothing to merge into
         };
         let moved = std::mem::take(&mut adjacency[small as usize]);
@@ -227,7 +249,10 @@ pub fn normalize(space: &CoverageSpace, raw: &[u32], min_cells: usize) -> Region
         }
         labels[i] = dense[r];
     }
-    Regions { labels, count: count as usize }
+    Regions {
+        labels,
+        count: count as usize,
+    }
 }
 
 #[cfg(test)]
@@ -257,7 +282,10 @@ pub(crate) mod tests {
                 grid.fill_rect(x, y, x + next() * 2.0, y + 0.1 + next() * 0.2, CellState::Occupied);
             }
         }
-        let robot = RobotShape { radius_m: 0.15, tool_width_m: 0.3 };
+        let robot = RobotShape {
+            radius_m: 0.15,
+            tool_width_m: 0.3,
+        };
         let start = (0..g.len()).map(|i| g.center_of(i)).find(|&p| {
             let i = g.index(g.locate(p).expect("on map"));
             grid.is_free(i)
@@ -269,7 +297,12 @@ pub(crate) mod tests {
         let g = *space.geometry();
         let cells = r.cells();
         for i in 0..g.len() {
-            prop_assert_eq!(space.reachable[i], r.labels[i] != NO_REGION, "cell {} reachable vs labelled", i);
+            prop_assert_eq!(
+                space.reachable[i],
+                r.labels[i] != NO_REGION,
+                "cell {} reachable vs labelled",
+                i
+            );
             if r.labels[i] != NO_REGION {
                 prop_assert!((r.labels[i] as usize) < r.count);
             }
@@ -290,7 +323,13 @@ pub(crate) mod tests {
             }
             prop_assert_eq!(seen.len(), list.len(), "region {} not connected", id);
             if r.count > 1 {
-                prop_assert!(list.len() >= min_cells, "region {} has {} < {} cells", id, list.len(), min_cells);
+                prop_assert!(
+                    list.len() >= min_cells,
+                    "region {} has {} < {} cells",
+                    id,
+                    list.len(),
+                    min_cells
+                );
             }
         }
         Ok(())

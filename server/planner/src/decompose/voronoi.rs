@@ -35,11 +35,17 @@ impl Decomposer for GeodesicVoronoi {
         let mut sites = Vec::new();
         for &i in &order {
             let p = g.center_of(i);
-            let (bx, by) = (((p.x - g.origin.x) / spacing) as usize, ((p.y - g.origin.y) / spacing) as usize);
+            let (bx, by) = (
+                ((p.x - g.origin.x) / spacing) as usize,
+                ((p.y - g.origin.y) / spacing) as usize,
+            );
             let mut free = true;
             'scan: for y in by.saturating_sub(1)..=(by + 1).min(bh - 1) {
                 for x in bx.saturating_sub(1)..=(bx + 1).min(bw - 1) {
-                    if buckets[y * bw + x].iter().any(|&s| (g.center_of(s) - p).norm() < spacing) {
+                    if buckets[y * bw + x]
+                        .iter()
+                        .any(|&s| (g.center_of(s) - p).norm() < spacing)
+                    {
                         free = false;
                         break 'scan;
                     }
@@ -76,7 +82,11 @@ pub fn geodesic_labels(space: &CoverageSpace, sites: &[usize]) -> Vec<u32> {
             if !space.reachable[j] {
                 continue;
             }
-            let step = if n.x != c.x && n.y != c.y { std::f64::consts::SQRT_2 } else { 1.0 };
+            let step = if n.x != c.x && n.y != c.y {
+                std::f64::consts::SQRT_2
+            } else {
+                1.0
+            };
             let nd = d + step;
             if nd < dist[j] {
                 dist[j] = nd;
@@ -115,9 +125,19 @@ mod tests {
     fn region_count_follows_target_area() {
         let g = GridGeometry::new(100, 100, 0.1, Point2::origin()).expect("valid");
         let grid = OccupancyGrid::filled(g, CellState::Free);
-        let space = CoverageSpace::new(grid, RobotShape { radius_m: 0.15, tool_width_m: 0.3 }, Point2::new(0.5, 0.5))
-            .expect("ok");
-        let p = DecomposeParams { target_area_m2: Some(4.0), ..Default::default() };
+        let space = CoverageSpace::new(
+            grid,
+            RobotShape {
+                radius_m: 0.15,
+                tool_width_m: 0.3,
+            },
+            Point2::new(0.5, 0.5),
+        )
+        .expect("ok");
+        let p = DecomposeParams {
+            target_area_m2: Some(4.0),
+            ..Default::default()
+        };
         let r = decompose(&space, DecompositionMethod::Voronoi, &p);
         // ~92 m² reachable, sites at least 2 m apart: a few tens of regions, not one and not hundreds.
         assert!((8..=40).contains(&r.count), "{} regions", r.count);

@@ -90,11 +90,15 @@ impl Decomposer for WallDivision {
         loop {
             let mut changed = false;
             for i in 0..g.len() {
-                if space.reachable[i] && labels[i] == NO_REGION {
-                    if let Some(l) = g.neighbors4(g.cell(i)).map(|n| labels[g.index(n)]).find(|&l| l != NO_REGION) {
-                        labels[i] = l;
-                        changed = true;
-                    }
+                if space.reachable[i]
+                    && labels[i] == NO_REGION
+                    && let Some(l) = g
+                        .neighbors4(g.cell(i))
+                        .map(|n| labels[g.index(n)])
+                        .find(|&l| l != NO_REGION)
+                {
+                    labels[i] = l;
+                    changed = true;
                 }
             }
             if !changed {
@@ -120,8 +124,15 @@ mod tests {
         let mut grid = OccupancyGrid::filled(g, CellState::Free);
         grid.fill_rect(3.95, 0.0, 4.05, 1.5, CellState::Occupied);
         grid.fill_rect(3.95, 2.5, 4.05, 4.0, CellState::Occupied);
-        let space = CoverageSpace::new(grid, RobotShape { radius_m: 0.15, tool_width_m: 0.3 }, Point2::new(0.5, 0.5))
-            .expect("ok");
+        let space = CoverageSpace::new(
+            grid,
+            RobotShape {
+                radius_m: 0.15,
+                tool_width_m: 0.3,
+            },
+            Point2::new(0.5, 0.5),
+        )
+        .expect("ok");
         let r = decompose(&space, DecompositionMethod::Walls, &DecomposeParams::default());
         assert_eq!(r.count, 2, "rooms left and right of the door");
         let left = r.labels[g.index(g.locate(Point2::new(1.0, 2.0)).expect("on map"))];

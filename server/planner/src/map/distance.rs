@@ -86,7 +86,12 @@ impl DistanceField {
                 }
             }
         }
-        Self { geometry, pad, dist_m, feature }
+        Self {
+            geometry,
+            pad,
+            dist_m,
+            feature,
+        }
     }
 
     /// The raster geometry.
@@ -260,15 +265,15 @@ mod tests {
             }).collect();
             let df = DistanceField::compute(geometry, |i| sites[i], border);
             let expect = brute(&geometry, &sites, border);
-            for i in 0..w * h {
-                if expect[i].is_infinite() {
+            for (i, &want) in expect.iter().enumerate() {
+                if want.is_infinite() {
                     prop_assert!(df.at(i).is_infinite());
                 } else {
-                    prop_assert!((df.at(i) - expect[i]).abs() < 1e-5, "cell {} got {} want {}", i, df.at(i), expect[i]);
+                    prop_assert!((df.at(i) - want).abs() < 1e-5, "cell {} got {} want {}", i, df.at(i), want);
                     let s = df.nearest_site(i).expect("site");
-                    prop_assert!(((s - geometry.center_of(i)).norm() - expect[i]).abs() < 1e-5);
+                    prop_assert!(((s - geometry.center_of(i)).norm() - want).abs() < 1e-5);
                     // At a cell centre the point query agrees with the cell value.
-                    prop_assert!((df.at_point(geometry.center_of(i)) - expect[i]).abs() < 1e-5);
+                    prop_assert!((df.at_point(geometry.center_of(i)) - want).abs() < 1e-5);
                 }
             }
         }

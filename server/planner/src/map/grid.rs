@@ -58,7 +58,12 @@ impl GridGeometry {
         }
         finite("origin x", origin.x)?;
         finite("origin y", origin.y)?;
-        Ok(Self { width, height, resolution, origin })
+        Ok(Self {
+            width,
+            height,
+            resolution,
+            origin,
+        })
     }
 
     /// Number of cells.
@@ -113,7 +118,10 @@ impl GridGeometry {
     /// Continuous cell coordinates of `p` (cell centres at half-integers), unclamped.
     #[inline]
     pub fn to_cell_coords(&self, p: Point2) -> (f64, f64) {
-        ((p.x - self.origin.x) / self.resolution, (p.y - self.origin.y) / self.resolution)
+        (
+            (p.x - self.origin.x) / self.resolution,
+            (p.y - self.origin.y) / self.resolution,
+        )
     }
 
     /// The (up to) 8 neighbours of a cell that lie on the grid.
@@ -163,7 +171,10 @@ impl OccupancyGrid {
 
     /// A grid of `width × height` free cells (tests and generated scenes).
     pub fn filled(geometry: GridGeometry, state: CellState) -> Self {
-        Self { cells: vec![state; geometry.len()], geometry }
+        Self {
+            cells: vec![state; geometry.len()],
+            geometry,
+        }
     }
 
     /// State of a cell.
@@ -221,7 +232,10 @@ pub struct Thresholds {
 
 impl Default for Thresholds {
     fn default() -> Self {
-        Self { free: 0.196, occupied: 0.65 }
+        Self {
+            free: 0.196,
+            occupied: 0.65,
+        }
     }
 }
 
@@ -274,10 +288,22 @@ mod tests {
 
     #[test]
     fn geometry_rejects_bad_input() {
-        assert!(matches!(GridGeometry::new(0, 3, 0.5, Point2::origin()), Err(PlannerError::EmptyMap { .. })));
-        assert!(matches!(GridGeometry::new(3, 3, 0.0, Point2::origin()), Err(PlannerError::InvalidResolution(_))));
-        assert!(matches!(GridGeometry::new(3, 3, -1.0, Point2::origin()), Err(PlannerError::InvalidResolution(_))));
-        assert!(matches!(GridGeometry::new(3, 3, f64::NAN, Point2::origin()), Err(PlannerError::InvalidResolution(_))));
+        assert!(matches!(
+            GridGeometry::new(0, 3, 0.5, Point2::origin()),
+            Err(PlannerError::EmptyMap { .. })
+        ));
+        assert!(matches!(
+            GridGeometry::new(3, 3, 0.0, Point2::origin()),
+            Err(PlannerError::InvalidResolution(_))
+        ));
+        assert!(matches!(
+            GridGeometry::new(3, 3, -1.0, Point2::origin()),
+            Err(PlannerError::InvalidResolution(_))
+        ));
+        assert!(matches!(
+            GridGeometry::new(3, 3, f64::NAN, Point2::origin()),
+            Err(PlannerError::InvalidResolution(_))
+        ));
         assert!(matches!(
             GridGeometry::new(3, 3, 0.1, Point2::new(f64::INFINITY, 0.0)),
             Err(PlannerError::NonFinite { .. })

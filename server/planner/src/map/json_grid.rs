@@ -34,15 +34,22 @@ pub struct JsonGrid {
 impl JsonGrid {
     /// Parses JSON text.
     pub fn parse(text: &str) -> Result<Self> {
-        serde_json::from_str(text).map_err(|e| PlannerError::InvalidParam { name: "json grid", reason: e.to_string() })
+        serde_json::from_str(text).map_err(|e| PlannerError::InvalidParam {
+            name: "json grid",
+            reason: e.to_string(),
+        })
     }
 
     /// Validates and thresholds into an [`OccupancyGrid`].
     pub fn into_grid(self) -> Result<OccupancyGrid> {
         finite("origin x", self.origin[0])?;
         finite("origin y", self.origin[1])?;
-        let geometry =
-            GridGeometry::new(self.width, self.height, self.resolution, Point2::new(self.origin[0], self.origin[1]))?;
+        let geometry = GridGeometry::new(
+            self.width,
+            self.height,
+            self.resolution,
+            Point2::new(self.origin[0], self.origin[1]),
+        )?;
         let defaults = Thresholds::default();
         let t = Thresholds {
             free: self.free_thresh.unwrap_or(defaults.free),
@@ -84,7 +91,15 @@ mod tests {
             .expect("parse")
             .into_grid()
             .expect("valid");
-        assert_eq!(g.cells, vec![CellState::Free, CellState::Occupied, CellState::Unknown, CellState::Unknown]);
+        assert_eq!(
+            g.cells,
+            vec![
+                CellState::Free,
+                CellState::Occupied,
+                CellState::Unknown,
+                CellState::Unknown
+            ]
+        );
     }
 
     #[test]

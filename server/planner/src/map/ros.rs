@@ -72,11 +72,15 @@ impl MapYaml {
             .image
             .filter(|s| !s.trim().is_empty())
             .ok_or_else(|| PlannerError::MapYaml("missing key `image`".into()))?;
-        let resolution = raw.resolution.ok_or_else(|| PlannerError::MapYaml("missing key `resolution`".into()))?;
+        let resolution = raw
+            .resolution
+            .ok_or_else(|| PlannerError::MapYaml("missing key `resolution`".into()))?;
         if !resolution.is_finite() || resolution <= 0.0 {
             return Err(PlannerError::InvalidResolution(resolution));
         }
-        let origin = raw.origin.ok_or_else(|| PlannerError::MapYaml("missing key `origin`".into()))?;
+        let origin = raw
+            .origin
+            .ok_or_else(|| PlannerError::MapYaml("missing key `origin`".into()))?;
         if origin.len() != 3 && origin.len() != 2 {
             return Err(PlannerError::MapYaml(format!(
                 "`origin` must be [x, y, yaw], got {} numbers",
@@ -101,7 +105,14 @@ impl MapYaml {
             occupied: raw.occupied_thresh.unwrap_or(defaults.occupied),
         };
         thresholds.validate()?;
-        Ok(Self { image, resolution, origin, negate, thresholds, mode: raw.mode.unwrap_or_default() })
+        Ok(Self {
+            image,
+            resolution,
+            origin,
+            negate,
+            thresholds,
+            mode: raw.mode.unwrap_or_default(),
+        })
     }
 }
 
@@ -121,8 +132,10 @@ pub fn load_ros_map(
     read_image: impl FnOnce(&str) -> std::result::Result<Vec<u8>, String>,
 ) -> Result<LoadedMap> {
     let yaml = MapYaml::parse(yaml_text)?;
-    let bytes =
-        read_image(&yaml.image).map_err(|reason| PlannerError::MissingImage { path: yaml.image.clone(), reason })?;
+    let bytes = read_image(&yaml.image).map_err(|reason| PlannerError::MissingImage {
+        path: yaml.image.clone(),
+        reason,
+    })?;
     grid_from_image(&yaml, &bytes)
 }
 
@@ -151,7 +164,11 @@ pub fn grid_from_image(yaml: &MapYaml, bytes: &[u8]) -> Result<LoadedMap> {
                 }
             }
             MapMode::Trinary | MapMode::Scale => {
-                let p = if yaml.negate { grey / 255.0 } else { (255.0 - grey) / 255.0 };
+                let p = if yaml.negate {
+                    grey / 255.0
+                } else {
+                    (255.0 - grey) / 255.0
+                };
                 let s = yaml.thresholds.classify(p);
                 if yaml.mode == MapMode::Scale && has_alpha && a < 255 && s == CellState::Free {
                     CellState::Unknown
@@ -171,7 +188,10 @@ pub fn grid_from_image(yaml: &MapYaml, bytes: &[u8]) -> Result<LoadedMap> {
             yaml.origin[2]
         ));
     }
-    Ok(LoadedMap { grid: OccupancyGrid::new(geometry, cells)?, warnings })
+    Ok(LoadedMap {
+        grid: OccupancyGrid::new(geometry, cells)?,
+        warnings,
+    })
 }
 
 #[cfg(test)]
@@ -211,16 +231,28 @@ mod tests {
         let img = pgm(3, 1, &[0, 255, 50]);
         let neg = YAML.replace("negate: 0", "negate: 1");
         let m = load_ros_map(&neg, |_| Ok(img.clone())).expect("loads");
-        assert_eq!(m.grid.cells, vec![CellState::Free, CellState::Occupied, CellState::Unknown]);
+        assert_eq!(
+            m.grid.cells,
+            vec![CellState::Free, CellState::Occupied, CellState::Unknown]
+        );
         let raw = format!("{YAML}mode: raw\n");
         let m = load_ros_map(&raw, |_| Ok(img.clone())).expect("loads");
-        assert_eq!(m.grid.cells, vec![CellState::Free, CellState::Unknown, CellState::Unknown]);
+        assert_eq!(
+            m.grid.cells,
+            vec![CellState::Free, CellState::Unknown, CellState::Unknown]
+        );
     }
 
     #[test]
     fn png_colour_is_averaged() {
         let mut buf = Vec::new();
-        let img = image::RgbImage::from_fn(2, 1, |x, _| if x == 0 { image::Rgb([255, 255, 255]) } else { image::Rgb([0, 0, 0]) });
+        let img = image::RgbImage::from_fn(2, 1, |x, _| {
+            if x == 0 {
+                image::Rgb([255, 255, 255])
+            } else {
+                image::Rgb([0, 0, 0])
+            }
+        });
         image::DynamicImage::ImageRgb8(img)
             .write_to(&mut std::io::Cursor::new(&mut buf), image::ImageFormat::Png)
             .expect("encode");
@@ -231,7 +263,10 @@ mod tests {
     #[test]
     fn errors_are_typed() {
         let img = pgm(1, 1, &[255]);
-        assert!(matches!(load_ros_map("image: [", |_| Ok(img.clone())), Err(PlannerError::MapYaml(_))));
+        assert!(matches!(
+            load_ros_map("image: [", |_| Ok(img.clone())),
+            Err(PlannerError::MapYaml(_))
+        ));
         assert!(matches!(
             load_ros_map(YAML, |_| Err("no such file".into())),
             Err(PlannerError::MissingImage { .. })
@@ -248,13 +283,24 @@ mod tests {
             load_ros_map(&YAML.replace("1.0, -2.0", ".nan, -2.0"), |_| Ok(img.clone())),
             Err(PlannerError::NonFinite { .. })
         ));
-        assert!(matches!(load_ros_map(YAML, |_| Ok(b"P5\n2 2\n255\n\x00".to_vec())), Err(PlannerError::ImageDecode(_))));
-        assert!(matches!(load_ros_map(YAML, |_| Ok(vec![1, 2, 3])), Err(PlannerError::ImageDecode(_))));
         assert!(matches!(
-            load_ros_map(&YAML.replace("free_thresh: 0.196", "free_thresh: 0.9"), |_| Ok(img.clone())),
+            load_ros_map(YAML, |_| Ok(b"P5\n2 2\n255\n\x00".to_vec())),
+            Err(PlannerError::ImageDecode(_))
+        ));
+        assert!(matches!(
+            load_ros_map(YAML, |_| Ok(vec![1, 2, 3])),
+            Err(PlannerError::ImageDecode(_))
+        ));
+        assert!(matches!(
+            load_ros_map(&YAML.replace("free_thresh: 0.196", "free_thresh: 0.9"), |_| Ok(
+                img.clone()
+            )),
             Err(PlannerError::InvalidParam { .. })
         ));
-        assert!(matches!(load_ros_map("resolution: 0.1\norigin: [0,0,0]\n", |_| Ok(img.clone())), Err(PlannerError::MapYaml(_))));
+        assert!(matches!(
+            load_ros_map("resolution: 0.1\norigin: [0,0,0]\n", |_| Ok(img.clone())),
+            Err(PlannerError::MapYaml(_))
+        ));
     }
 
     #[test]

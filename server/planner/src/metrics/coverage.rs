@@ -19,7 +19,11 @@ impl CoverageRaster {
     /// An empty raster for a tool of width `2 · half_width_m`. A cell exactly at the half-width counts as
     /// covered (a nanometre of tolerance absorbs floating-point noise in lane offsets).
     pub fn new(geometry: GridGeometry, half_width_m: f64) -> Self {
-        Self { covered: vec![false; geometry.len()], geometry, half_width_m: half_width_m + 1e-9 }
+        Self {
+            covered: vec![false; geometry.len()],
+            geometry,
+            half_width_m: half_width_m + 1e-9,
+        }
     }
 
     /// The covered flags, row-major.
@@ -68,13 +72,7 @@ impl CoverageRaster {
 }
 
 /// Calls `f` with the index of every cell whose centre lies within `radius` of segment `a`–`b`.
-pub fn for_each_cell_in_capsule(
-    g: &GridGeometry,
-    a: Point2,
-    b: Point2,
-    radius: f64,
-    mut f: impl FnMut(usize),
-) {
+pub fn for_each_cell_in_capsule(g: &GridGeometry, a: Point2, b: Point2, radius: f64, mut f: impl FnMut(usize)) {
     if !(a.x.is_finite() && a.y.is_finite() && b.x.is_finite() && b.y.is_finite() && radius >= 0.0) {
         return;
     }
@@ -90,7 +88,11 @@ pub fn for_each_cell_in_capsule(
     let row1 = (row1f as usize).min(g.height - 1);
     let d = b - a;
     let len = d.norm();
-    let n = if len > 1e-12 { Vector2::new(-d.y / len, d.x / len) } else { Vector2::new(0.0, 1.0) };
+    let n = if len > 1e-12 {
+        Vector2::new(-d.y / len, d.x / len)
+    } else {
+        Vector2::new(0.0, 1.0)
+    };
     let corners = [a + n * radius, b + n * radius, b - n * radius, a - n * radius];
     for row in row0..=row1 {
         let yc = g.origin.y + (row as f64 + 0.5) * res;
@@ -150,10 +152,10 @@ mod tests {
             let (a, b) = (Point2::new(ax, ay), Point2::new(bx, by));
             let mut got = vec![false; g.len()];
             for_each_cell_in_capsule(&g, a, b, r, |i| got[i] = true);
-            for i in 0..g.len() {
+            for (i, &hit) in got.iter().enumerate() {
                 let d = point_segment_distance(g.center_of(i), a, b);
                 if (d - r).abs() > 1e-9 {
-                    prop_assert_eq!(got[i], d <= r, "cell {} distance {} radius {}", i, d, r);
+                    prop_assert_eq!(hit, d <= r, "cell {} distance {} radius {}", i, d, r);
                 }
             }
         }

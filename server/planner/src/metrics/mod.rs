@@ -44,10 +44,16 @@ pub fn evaluate(space: &CoverageSpace, path: &[Point2]) -> PlanMetrics {
     raster.stamp_polyline(path);
     let covered = raster.count();
     let coverable_cells = space.coverable_count();
-    let covered_coverable_cells = (0..g.len()).filter(|&i| space.coverable[i] && raster.is_covered(i)).count();
+    let covered_coverable_cells = (0..g.len())
+        .filter(|&i| space.coverable[i] && raster.is_covered(i))
+        .count();
     let length_m = crate::geom::polyline_length(path);
     let covered_area = covered as f64 * g.resolution * g.resolution;
-    let overlap_pct = if covered_area > 0.0 { (length_m * w - covered_area) / covered_area * 100.0 } else { 0.0 };
+    let overlap_pct = if covered_area > 0.0 {
+        (length_m * w - covered_area) / covered_area * 100.0
+    } else {
+        0.0
+    };
     let coverage_pct = if coverable_cells > 0 {
         covered_coverable_cells as f64 / coverable_cells as f64 * 100.0
     } else {
@@ -71,7 +77,9 @@ pub fn count_turns(path: &[Point2]) -> usize {
         .map(|s| s[1] - s[0])
         .filter(|d| d.norm() > 1e-9)
         .collect();
-    dirs.windows(2).filter(|d| heading_change(d[0], d[1]) >= TURN_THRESHOLD_RAD - 1e-12).count()
+    dirs.windows(2)
+        .filter(|d| heading_change(d[0], d[1]) >= TURN_THRESHOLD_RAD - 1e-12)
+        .count()
 }
 
 /// Path points closer than the robot radius to a non-free cell, sampling each segment every quarter cell.
@@ -107,8 +115,15 @@ mod tests {
         // 3 m × 1.2 m room; tool 0.4: lanes at y = 0.2+0.1·k…, clearance radius 0.2.
         let g = GridGeometry::new(30, 12, 0.1, Point2::origin()).expect("valid");
         let grid = OccupancyGrid::filled(g, CellState::Free);
-        let space = CoverageSpace::new(grid, RobotShape { radius_m: 0.2, tool_width_m: 0.4 }, Point2::new(0.5, 0.5))
-            .expect("ok");
+        let space = CoverageSpace::new(
+            grid,
+            RobotShape {
+                radius_m: 0.2,
+                tool_width_m: 0.4,
+            },
+            Point2::new(0.5, 0.5),
+        )
+        .expect("ok");
         // Reachable centres: x in [0.15, 2.85], y in [0.15, 1.05] (0.2 m from the ring outside the map).
         let path = vec![
             Point2::new(0.15, 0.15),

@@ -147,11 +147,7 @@ fn clamp_probability(p: f64, default: f64) -> f64 {
 
 /// A random move around a random node of `st` (see the module docs), or `None` when the draw is not a
 /// valid move.
-pub(crate) fn random_move(
-    search: &Search<'_, '_>,
-    st: &State,
-    rng: &mut ChaCha8Rng,
-) -> Option<Move> {
+pub(crate) fn random_move(search: &Search<'_, '_>, st: &State, rng: &mut ChaCha8Rng) -> Option<Move> {
     let n = st.order.len();
     let closed = search.inst.closed;
     let u = rng.random_range(0..n);
@@ -179,10 +175,7 @@ pub(crate) fn random_move(
         if rng.random_bool(0.5) {
             (hi <= n).then_some(Move::TwoOpt { i: lo, j: hi })
         } else {
-            (lo >= 1).then(|| Move::TwoOpt {
-                i: lo - 1,
-                j: hi - 1,
-            })
+            (lo >= 1).then(|| Move::TwoOpt { i: lo - 1, j: hi - 1 })
         }
     } else if kind < 18 {
         let len = rng.random_range(1..=search.max_chain());
@@ -195,11 +188,7 @@ pub(crate) fn random_move(
         } else {
             let v = *nb.get(rng.random_range(0..nb.len().max(1)))?;
             let y = random_slot(v, rng);
-            if rng.random_bool(0.5) {
-                y.checked_sub(1)?
-            } else {
-                y
-            }
+            if rng.random_bool(0.5) { y.checked_sub(1)? } else { y }
         };
         if t > n || (t + 1 >= a && t <= b) {
             return None;

@@ -119,11 +119,7 @@ fn cheapest_insertion(inst: &Inst<'_>) -> Vec<usize> {
         for o in 0..inst.k(u) {
             let t = inst.opt(u, o);
             let into_y = g.to.map_or(0.0, |row| Inst::d_row(row, t.exit));
-            let c = (
-                Inst::d_row(g.from, t.entry) + t.cost + into_y - g.old,
-                g.x,
-                o,
-            );
+            let c = (Inst::d_row(g.from, t.entry) + t.cost + into_y - g.old, g.x, o);
             if best.is_none_or(|b| by_cost(&c, &b).is_lt()) {
                 best = Some(c);
             }
@@ -208,10 +204,7 @@ mod tests {
         for n in [0, 1, 2, 7, 50] {
             for closed in [true, false] {
                 let p = euclid(n, 4, closed, n as u64);
-                for m in [
-                    Construction::NearestNeighbour,
-                    Construction::CheapestInsertion,
-                ] {
+                for m in [Construction::NearestNeighbour, Construction::CheapestInsertion] {
                     let t = construct(&p, m);
                     assert_eq!(t.check(&p), Ok(()), "{m:?} n={n}");
                     assert_eq!(t.cost, super::super::tour_cost(&p, &t.order, &t.options));
@@ -243,8 +236,7 @@ mod tests {
                     };
                     for o in 0..inst.k(u) {
                         let t = inst.opt(u, o);
-                        let (into, old) =
-                            to.map_or((0.0, 0.0), |q| (inst.d(t.exit, q), inst.d(from, q)));
+                        let (into, old) = to.map_or((0.0, 0.0), |q| (inst.d(t.exit, q), inst.d(from, q)));
                         let c = inst.d(from, t.entry) + t.cost + into - old;
                         if best.is_none_or(|b| c < b.0) {
                             best = Some((c, g, u, o));
@@ -277,13 +269,7 @@ mod tests {
     #[test]
     fn square_corners() {
         // Depot at (0,0); nodes at the other corners of a 10 m square and at its centre.
-        let pts = [
-            (0.0, 0.0),
-            (10.0, 0.0),
-            (10.0, 10.0),
-            (0.0, 10.0),
-            (5.0, 5.0),
-        ];
+        let pts = [(0.0, 0.0), (10.0, 0.0), (10.0, 10.0), (0.0, 10.0), (5.0, 5.0)];
         let dist = DistanceMatrix::from_fn(5, |i, j| {
             let (a, b): ((f64, f64), (f64, f64)) = (pts[i], pts[j]);
             (a.0 - b.0).hypot(a.1 - b.1)
@@ -306,10 +292,7 @@ mod tests {
         };
         let ci = construct(&p, Construction::CheapestInsertion);
         // The perimeter with one detour through the centre: 30 + 2·√50.
-        assert!(
-            (ci.cost - (30.0 + 2.0 * 50f64.sqrt())).abs() < 1e-9,
-            "{ci:?}"
-        );
+        assert!((ci.cost - (30.0 + 2.0 * 50f64.sqrt())).abs() < 1e-9, "{ci:?}");
         let nn = construct(&p, Construction::NearestNeighbour);
         assert_eq!(nn.order[0], 3, "the centre is nearest to the depot");
     }

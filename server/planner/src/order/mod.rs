@@ -189,10 +189,7 @@ impl TourProblem {
                     ));
                 }
                 if o.cost.is_nan() || o.cost < 0.0 {
-                    return bad(format!(
-                        "node {v} option {k}: cost {} must be ≥ 0 or +inf",
-                        o.cost
-                    ));
+                    return bad(format!("node {v} option {k}: cost {} must be ≥ 0 or +inf", o.cost));
                 }
                 let Some(r) = opts.get(o.reverse) else {
                     return bad(format!(
@@ -202,8 +199,7 @@ impl TourProblem {
                     ));
                 };
                 let same_cost = r.cost == o.cost
-                    || (r.cost - o.cost).abs()
-                        <= REVERSE_COST_TOL * r.cost.abs().max(o.cost.abs()).max(1.0);
+                    || (r.cost - o.cost).abs() <= REVERSE_COST_TOL * r.cost.abs().max(o.cost.abs()).max(1.0);
                 if r.entry != o.exit || r.exit != o.entry || !same_cost || r.reverse != k {
                     return bad(format!(
                         "node {v} option {k}: option {} is not its reverse \
@@ -233,21 +229,12 @@ impl Tour {
     /// A tour of `order` with `options`, its cost computed by [`tour_cost`].
     pub fn new(problem: &TourProblem, order: Vec<usize>, options: Vec<usize>) -> Self {
         let cost = tour_cost(problem, &order, &options);
-        Self {
-            order,
-            options,
-            cost,
-        }
+        Self { order, options, cost }
     }
 
     /// Checks that the tour visits every node of `problem` exactly once with an existing option.
     pub fn check(&self, problem: &TourProblem) -> Result<()> {
-        let bad = |reason: String| {
-            Err(PlannerError::InvalidParam {
-                name: "tour",
-                reason,
-            })
-        };
+        let bad = |reason: String| Err(PlannerError::InvalidParam { name: "tour", reason });
         let n = problem.nodes.len();
         if self.order.len() != n || self.options.len() != n {
             return bad(format!(
@@ -334,11 +321,7 @@ pub enum OrderMethod {
 
 impl OrderMethod {
     /// Every method, in documentation order.
-    pub const ALL: [OrderMethod; 3] = [
-        OrderMethod::TwoOpt,
-        OrderMethod::RecordToRecord,
-        OrderMethod::Anneal,
-    ];
+    pub const ALL: [OrderMethod; 3] = [OrderMethod::TwoOpt, OrderMethod::RecordToRecord, OrderMethod::Anneal];
 
     /// The method's name as users spell it: `"two-opt"`, `"rrt"` or `"anneal"`.
     pub fn name(self) -> &'static str {
@@ -369,16 +352,10 @@ impl std::str::FromStr for OrderMethod {
     type Err = String;
 
     fn from_str(s: &str) -> std::result::Result<Self, Self::Err> {
-        OrderMethod::ALL
-            .into_iter()
-            .find(|m| m.name() == s)
-            .ok_or_else(|| {
-                let names: Vec<&str> = OrderMethod::ALL.iter().map(|m| m.name()).collect();
-                format!(
-                    "unknown order method {s:?}; expected one of {}",
-                    names.join(", ")
-                )
-            })
+        OrderMethod::ALL.into_iter().find(|m| m.name() == s).ok_or_else(|| {
+            let names: Vec<&str> = OrderMethod::ALL.iter().map(|m| m.name()).collect();
+            format!("unknown order method {s:?}; expected one of {}", names.join(", "))
+        })
     }
 }
 
@@ -752,8 +729,7 @@ pub(crate) mod testutil {
     /// 1 m tool (four options: two diagonals, both directions, cost ≈ its area), up to `max_options`.
     pub fn euclid(n: usize, max_options: usize, closed: bool, seed: u64) -> TourProblem {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let mut pts: Vec<(f64, f64)> =
-            vec![(rng.random_range(0.0..100.0), rng.random_range(0.0..100.0))];
+        let mut pts: Vec<(f64, f64)> = vec![(rng.random_range(0.0..100.0), rng.random_range(0.0..100.0))];
         let mut nodes = Vec::with_capacity(n);
         let add = |pts: &mut Vec<(f64, f64)>, p: (f64, f64)| {
             pts.push(p);
@@ -832,9 +808,7 @@ pub(crate) mod testutil {
     pub fn brute_force(p: &TourProblem) -> f64 {
         let mut order: Vec<usize> = (0..p.nodes.len()).collect();
         let mut best = f64::INFINITY;
-        permute(&mut order, 0, &mut |o| {
-            best = best.min(best_options(p, o).1)
-        });
+        permute(&mut order, 0, &mut |o| best = best.min(best_options(p, o).1));
         best
     }
 
@@ -910,13 +884,7 @@ mod tests {
         assert_eq!(m.len(), 3);
         assert!(!m.is_empty() && DistanceMatrix::new(0).is_empty());
         assert_eq!(
-            (
-                m.get(0, 1),
-                m.get(1, 0),
-                m.get(1, 2),
-                m.get(2, 1),
-                m.get(2, 2)
-            ),
+            (m.get(0, 1), m.get(1, 0), m.get(1, 2), m.get(2, 1), m.get(2, 2)),
             (1.0, 1.0, 12.0, 12.0, 0.0)
         );
         assert_eq!(m.get(3, 0), f64::INFINITY);
@@ -970,11 +938,7 @@ mod tests {
         p.dist.set(2, 3, -1.0);
         cases.push((p, "distance between points 2 and 3"));
         for (p, needle) in cases {
-            let err = p
-                .validate()
-                .err()
-                .map(|e| e.to_string())
-                .unwrap_or_default();
+            let err = p.validate().err().map(|e| e.to_string()).unwrap_or_default();
             assert!(err.contains(needle), "{needle:?} not in {err:?}");
         }
         let mut p = good;
@@ -982,11 +946,7 @@ mod tests {
         p.nodes[0][0].cost = f64::INFINITY;
         let r = p.nodes[0][0].reverse;
         p.nodes[0][r].cost = f64::INFINITY;
-        assert_eq!(
-            p.validate(),
-            Ok(()),
-            "+inf means very expensive, not invalid"
-        );
+        assert_eq!(p.validate(), Ok(()), "+inf means very expensive, not invalid");
     }
 
     #[test]
@@ -994,10 +954,7 @@ mod tests {
         // Points on a line: depot 0 at x=0, node 0 is a lane 1→2 (x=1..3, cost 2), node 1 a point at x=5.
         let xs: [f64; 4] = [0.0, 1.0, 3.0, 5.0];
         let dist = DistanceMatrix::from_fn(4, |i, j| (xs[j] - xs[i]).abs());
-        let nodes = vec![
-            vec![opt(1, 2, 2.0, 1), opt(2, 1, 2.0, 0)],
-            vec![opt(3, 3, 0.5, 0)],
-        ];
+        let nodes = vec![vec![opt(1, 2, 2.0, 1), opt(2, 1, 2.0, 0)], vec![opt(3, 3, 0.5, 0)]];
         let mut p = TourProblem {
             dist,
             depot: 0,
@@ -1012,15 +969,8 @@ mod tests {
         assert_eq!(tour_cost(&p, &[0, 1], &[0, 3]), f64::INFINITY);
         assert_eq!(best_options(&p, &[0, 1]), (vec![0, 0], 10.5));
         p.closed = false;
-        assert_eq!(
-            tour_cost(&p, &[0, 1], &[0, 0]),
-            5.5,
-            "an open tour has no return leg"
-        );
-        assert_eq!(
-            best_options(&p, &[1, 0]),
-            (vec![0, 1], 5.0 + 0.5 + 2.0 + 2.0)
-        );
+        assert_eq!(tour_cost(&p, &[0, 1], &[0, 0]), 5.5, "an open tour has no return leg");
+        assert_eq!(best_options(&p, &[1, 0]), (vec![0, 1], 5.0 + 0.5 + 2.0 + 2.0));
     }
 
     #[test]
@@ -1034,10 +984,7 @@ mod tests {
         for m in OrderMethod::ALL {
             let t = m.orderer().solve(&p, 3, &SolveBudget::unlimited());
             assert_eq!(t.check(&p), Ok(()));
-            assert_eq!(
-                t.cost.to_bits(),
-                tour_cost(&p, &t.order, &t.options).to_bits()
-            );
+            assert_eq!(t.cost.to_bits(), tour_cost(&p, &t.order, &t.options).to_bits());
             assert!(!t.cost.is_nan());
         }
         // Huge but finite distances everywhere: still a valid tour, and infinite edges are avoided
@@ -1086,9 +1033,7 @@ mod tests {
             closed: true,
         };
         let one = TourProblem {
-            dist: DistanceMatrix::from_fn(3, |i, j| {
-                [[0.0, 4.0, 1.0], [4.0, 0.0, 3.0], [1.0, 3.0, 0.0]][i][j]
-            }),
+            dist: DistanceMatrix::from_fn(3, |i, j| [[0.0, 4.0, 1.0], [4.0, 0.0, 3.0], [1.0, 3.0, 0.0]][i][j]),
             depot: 0,
             nodes: vec![vec![opt(1, 2, 3.0, 1), opt(2, 1, 3.0, 0)]],
             closed: true,
@@ -1138,13 +1083,9 @@ mod tests {
     #[test]
     fn open_tours_ignore_the_return_leg() {
         for m in OrderMethod::ALL {
-            let t = m
-                .orderer()
-                .solve(&line(5, false), 2, &SolveBudget::unlimited());
+            let t = m.orderer().solve(&line(5, false), 2, &SolveBudget::unlimited());
             assert_eq!((t.order.clone(), t.cost), (vec![0, 1, 2, 3, 4], 5.0), "{m}");
-            let t = m
-                .orderer()
-                .solve(&line(5, true), 2, &SolveBudget::unlimited());
+            let t = m.orderer().solve(&line(5, true), 2, &SolveBudget::unlimited());
             assert_eq!(t.cost, 10.0, "{m}");
         }
         let p = euclid(9, 4, false, 8);
@@ -1164,10 +1105,7 @@ mod tests {
         let nn = construct(&p, Construction::NearestNeighbour);
         let stop_now = || true;
         for m in OrderMethod::ALL {
-            for budget in [
-                SolveBudget::new(0),
-                SolveBudget::unlimited().with_stop(&stop_now),
-            ] {
+            for budget in [SolveBudget::new(0), SolveBudget::unlimited().with_stop(&stop_now)] {
                 let t = m.orderer().solve(&p, 4, &budget);
                 assert_eq!(t, nn, "{m} {budget:?}");
             }
@@ -1211,15 +1149,9 @@ mod tests {
         // 2-opt + Or-opt + DP is a local optimum (measured worst: 1.00 Euclidean, 1.30 non-metric); the
         // metaheuristics find (nearly) the optimum at these sizes (measured worst 1.011).
         let [non_metric, metric] = worst;
-        assert!(
-            metric[0] <= 1.10 && non_metric[0] <= 1.5,
-            "two-opt {worst:?}"
-        );
+        assert!(metric[0] <= 1.10 && non_metric[0] <= 1.5, "two-opt {worst:?}");
         assert!(metric[1] <= 1.05 && non_metric[1] <= 1.05, "rrt {worst:?}");
-        assert!(
-            metric[2] <= 1.05 && non_metric[2] <= 1.05,
-            "anneal {worst:?}"
-        );
+        assert!(metric[2] <= 1.05 && non_metric[2] <= 1.05, "anneal {worst:?}");
     }
 
     #[test]
@@ -1239,10 +1171,7 @@ mod tests {
         for (label, k) in [("points (k=1)", 1), ("mixed options (k≤4)", 4)] {
             let seeds = 0..5u64;
             let mut rows: Vec<(String, f64, f64)> = Vec::new();
-            let problems: Vec<TourProblem> = seeds
-                .clone()
-                .map(|s| euclid(200, k, true, 1000 + s))
-                .collect();
+            let problems: Vec<TourProblem> = seeds.clone().map(|s| euclid(200, k, true, 1000 + s)).collect();
             let nn: Vec<f64> = problems
                 .iter()
                 .map(|p| construct(p, Construction::NearestNeighbour).cost)

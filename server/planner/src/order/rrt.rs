@@ -185,13 +185,8 @@ mod tests {
         let mut gains = [0.0f64; 2];
         for seed in 0..3 {
             let p = euclid(100, 4, true, 40 + seed);
-            let base = TwoOpt::default()
-                .solve(&p, seed, &SolveBudget::unlimited())
-                .cost;
-            for (g, m) in gains
-                .iter_mut()
-                .zip([OrderMethod::RecordToRecord, OrderMethod::Anneal])
-            {
+            let base = TwoOpt::default().solve(&p, seed, &SolveBudget::unlimited()).cost;
+            for (g, m) in gains.iter_mut().zip([OrderMethod::RecordToRecord, OrderMethod::Anneal]) {
                 *g += base - m.orderer().solve(&p, seed, &SolveBudget::unlimited()).cost;
             }
         }

@@ -39,9 +39,7 @@
 use std::collections::VecDeque;
 
 use super::construct::construct_order;
-use super::{
-    Construction, Inst, Meter, Orderer, SolveBudget, Tour, TourProblem, dp_options, improves,
-};
+use super::{Construction, Inst, Meter, Orderer, SolveBudget, Tour, TourProblem, dp_options, improves};
 
 /// Knobs of the 2-opt local search (also used by the other strategies to repair their perturbations).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -254,11 +252,7 @@ impl<'p, 'b> Search<'p, 'b> {
     pub fn slots(&self, st: &State, v: usize) -> ([usize; 2], usize) {
         let n = self.inst.n;
         if v == n {
-            if self.inst.closed {
-                ([0, n + 1], 2)
-            } else {
-                ([0, 0], 1)
-            }
+            if self.inst.closed { ([0, n + 1], 2) } else { ([0, 0], 1) }
         } else {
             ([st.pos[v], 0], 1)
         }
@@ -286,11 +280,7 @@ impl<'p, 'b> Search<'p, 'b> {
     /// Point the tour leaves slot `s` from (0 ≤ s ≤ n).
     #[inline]
     fn out(&self, st: &State, s: usize) -> usize {
-        if s == 0 {
-            self.inst.depot
-        } else {
-            self.exit(st, s)
-        }
+        if s == 0 { self.inst.depot } else { self.exit(st, s) }
     }
 
     /// Point the tour enters slot `s` at (1 ≤ s ≤ n+1); `None` for the end of an open tour.
@@ -320,22 +310,14 @@ impl<'p, 'b> Search<'p, 'b> {
             Move::TwoOpt { i, j } => {
                 let removed = self.edge(st, i) + self.edge(st, j);
                 let out_i = self.out(st, i);
-                let added = self.inst.d(out_i, self.exit(st, j))
-                    + self.w(self.entry(st, i + 1), self.inn(st, j + 1));
+                let added = self.inst.d(out_i, self.exit(st, j)) + self.w(self.entry(st, i + 1), self.inn(st, j + 1));
                 (removed, added)
             }
-            Move::OrOpt {
-                a,
-                b,
-                t,
-                reversed,
-                o,
-            } => {
+            Move::OrOpt { a, b, t, reversed, o } => {
                 let before = self.out(st, a - 1);
                 let after = self.inn(st, b + 1);
                 let (gap_from, gap_to) = (self.out(st, t), self.inn(st, t + 1));
-                let mut removed =
-                    self.edge(st, a - 1) + self.edge(st, b) + self.w(gap_from, gap_to);
+                let mut removed = self.edge(st, a - 1) + self.edge(st, b) + self.w(gap_from, gap_to);
                 let mut added = self.w(before, after);
                 if a == b {
                     let cur = self.inst.opt(st.order[a - 1], st.opt[a - 1]);
@@ -343,11 +325,9 @@ impl<'p, 'b> Search<'p, 'b> {
                     removed += cur.cost;
                     added += new.cost + self.inst.d(gap_from, new.entry) + self.w(new.exit, gap_to);
                 } else if reversed {
-                    added +=
-                        self.inst.d(gap_from, self.exit(st, b)) + self.w(self.entry(st, a), gap_to);
+                    added += self.inst.d(gap_from, self.exit(st, b)) + self.w(self.entry(st, a), gap_to);
                 } else {
-                    added +=
-                        self.inst.d(gap_from, self.entry(st, a)) + self.w(self.exit(st, b), gap_to);
+                    added += self.inst.d(gap_from, self.entry(st, a)) + self.w(self.exit(st, b), gap_to);
                 }
                 (removed, added)
             }
@@ -374,19 +354,9 @@ impl<'p, 'b> Search<'p, 'b> {
         }
         match mv {
             Move::TwoOpt { i, j } => self.reverse(st, i, j),
-            Move::OrOpt {
-                a,
-                b,
-                t,
-                reversed,
-                o,
-            } => {
+            Move::OrOpt { a, b, t, reversed, o } => {
                 let len = b - a + 1;
-                let (lo, hi, start) = if t < a {
-                    (t, b, t)
-                } else {
-                    (a - 1, t, t - len)
-                };
+                let (lo, hi, start) = if t < a { (t, b, t) } else { (a - 1, t, t - len) };
                 if t < a {
                     st.order[lo..hi].rotate_right(len);
                     st.opt[lo..hi].rotate_right(len);
@@ -429,9 +399,7 @@ impl<'p, 'b> Search<'p, 'b> {
                 return false;
             }
             let (removed, added) = search.delta(st, mv);
-            if improves(removed, added)
-                && best.is_none_or(|b| (removed - added).total_cmp(&b.0).is_gt())
-            {
+            if improves(removed, added) && best.is_none_or(|b| (removed - added).total_cmp(&b.0).is_gt()) {
                 best = Some((removed - added, mv, (removed, added)));
             }
             true
@@ -450,10 +418,7 @@ impl<'p, 'b> Search<'p, 'b> {
             }
         }
         let row = u * self.kn;
-        let near = self.nbd[row..row + self.kn]
-            .iter()
-            .take_while(|&&d| d < bound)
-            .count();
+        let near = self.nbd[row..row + self.kn].iter().take_while(|&&d| d < bound).count();
         'scan: {
             for idx in (0..near).filter(|_| reversible) {
                 let v = self.nb[u * self.kn + idx];
@@ -467,16 +432,7 @@ impl<'p, 'b> Search<'p, 'b> {
                         if hi <= n && !consider(self, st, Move::TwoOpt { i: lo, j: hi }) {
                             break 'scan;
                         }
-                        if lo >= 1
-                            && !consider(
-                                self,
-                                st,
-                                Move::TwoOpt {
-                                    i: lo - 1,
-                                    j: hi - 1,
-                                },
-                            )
-                        {
+                        if lo >= 1 && !consider(self, st, Move::TwoOpt { i: lo - 1, j: hi - 1 }) {
                             break 'scan;
                         }
                     }
@@ -546,9 +502,7 @@ impl<'p, 'b> Search<'p, 'b> {
                                 }
                             }
                         } else {
-                            for reversed in
-                                [false, true].into_iter().take(1 + usize::from(reversible))
-                            {
+                            for reversed in [false, true].into_iter().take(1 + usize::from(reversible)) {
                                 if !consider(
                                     self,
                                     st,
@@ -671,12 +625,7 @@ fn neighbour_lists(inst: &Inst<'_>, k: usize) -> (Vec<usize>, Vec<f64>, usize) {
             }
         }
         row.clear();
-        row.extend(
-            near.iter()
-                .enumerate()
-                .filter(|&(b, _)| b != a)
-                .map(|(b, &d)| (d, b)),
-        );
+        row.extend(near.iter().enumerate().filter(|&(b, _)| b != a).map(|(b, &d)| (d, b)));
         if kn < row.len() && kn > 0 {
             row.select_nth_unstable_by(kn - 1, cmp);
             row.truncate(kn);
@@ -704,10 +653,7 @@ mod tests {
         for i in (1..order.len()).rev() {
             order.swap(i, rng.random_range(0..=i));
         }
-        let opt = order
-            .iter()
-            .map(|&v| rng.random_range(0..inst.k(v)))
-            .collect();
+        let opt = order.iter().map(|&v| rng.random_range(0..inst.k(v))).collect();
         State::new(inst, order, opt)
     }
 
@@ -836,10 +782,7 @@ mod tests {
         let mut p = euclid(30, 2, true, 17);
         for node in &mut p.nodes {
             let first = node[0];
-            *node = vec![TourOption {
-                reverse: 0,
-                ..first
-            }];
+            *node = vec![TourOption { reverse: 0, ..first }];
         }
         let inst = Inst::new(&p);
         assert!(!inst.reversible, "the instance has one-way lanes");
@@ -859,9 +802,7 @@ mod tests {
                 (10.0 * a.cos(), 10.0 * a.sin())
             })
             .collect();
-        let dist = DistanceMatrix::from_fn(n + 1, |i, j| {
-            (pts[i].0 - pts[j].0).hypot(pts[i].1 - pts[j].1)
-        });
+        let dist = DistanceMatrix::from_fn(n + 1, |i, j| (pts[i].0 - pts[j].0).hypot(pts[i].1 - pts[j].1));
         let nodes = (1..=n)
             .map(|q| {
                 vec![TourOption {
@@ -880,10 +821,6 @@ mod tests {
         };
         let perimeter = 2.0 * (n + 1) as f64 * 10.0 * (std::f64::consts::PI / (n + 1) as f64).sin();
         let t = TwoOpt::default().solve(&p, 0, &SolveBudget::unlimited());
-        assert!(
-            (t.cost - perimeter).abs() < 1e-6,
-            "{} vs {perimeter}",
-            t.cost
-        );
+        assert!((t.cost - perimeter).abs() < 1e-6, "{} vs {perimeter}", t.cost);
     }
 }

@@ -1,13 +1,17 @@
 //! Targeted passes: cover what the lanes (or rings) of a region missed, without blanket boundary laps.
 //!
-//! After the main pattern of every region is stamped on the coverage raster, each region looks at the cover
-//! targets it is responsible for that are still uncovered — typically the saw-tooth bands along walls that
-//! are not parallel to its lanes, and the rims of round obstacles. It then:
-//! 1. walks its contour (the region's boundary loops) and keeps only the stretches whose cells are within
-//!    half a tool width of an uncovered target, extended a little at both ends and merged across short gaps
-//!    (driving on along the wall beats leaving and coming back);
-//! 2. covers anything still left (pockets the contour does not reach) by single visits at the reachable cell
-//!    nearest to it.
+//! After the main pattern of every region and the steps between its lanes are stamped on the coverage
+//! raster, each region looks at the cover targets it is responsible for that are still uncovered —
+//! typically the scallops that lane ends leave along walls across the lanes, the saw-tooth bands along walls
+//! at an angle to them, and the rims of round obstacles. [`candidates`] proposes:
+//! 1. stretches of the region's contour whose cells are within half a tool width of an uncovered target,
+//!    extended a little at both ends, merged across short gaps and cut into pieces of bounded length;
+//! 2. single visits (at the nearest reachable cell) for uncovered targets no stretch reaches.
+//!
+//! [`select`] then picks candidates greedily by new coverage per metre of extra driving: every candidate at
+//! least `min_yield` as productive as a lane is taken, and beyond that the most productive ones until the
+//! coverage target is met. A plan thus covers the edges wherever that is cheap, and spends extra driving on
+//! the last fractions of a percent only as far as the target asks.
 
 use super::contour::trace_loops;
 use super::lanes::RegionView;
@@ -15,84 +19,204 @@ use super::{Task, TaskKind};
 use crate::geom::{Point2, simplify_polyline};
 use crate::map::DistanceField;
 use crate::metrics::CoverageRaster;
+use crate::metrics::coverage::for_each_cell_in_capsule;
 use crate::space::CoverageSpace;
 
-/// Passes and visits that cover the region's still-uncovered targets; stamps them on `raster`.
+/// A proposed pass with the region it serves.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Candidate {
+    /// Region id.
+    pub region: u32,
+    /// The pass.
+    pub task: Task,
+}
+
+/// Targeted-pass knobs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PassParams {
+    /// Keep adding the most productive passes until this share of coverable cells is covered, percent.
+    pub coverage_target_pct: f64,
+    /// Passes at least this productive relative to a lane (new cells per metre) are always taken.
+    pub min_yield: f64,
+    /// Longest single contour stretch, in tool widths (longer ones are cut so selection stays granular).
+    pub max_stretch_widths: f64,
+}
+
+impl Default for PassParams {
+    fn default() -> Self {
+        Self {
+            coverage_target_pct: 99.7,
+            min_yield: 0.25,
+            max_stretch_widths: 8.0,
+        }
+    }
+}
+
+/// Candidate passes and visits for one region's still-uncovered targets (nothing is stamped).
 /// `nearest_reachable` is the distance field whose sites are the reachable cells.
-pub fn targeted_passes(
+pub fn candidates(
     space: &CoverageSpace,
     region: RegionView<'_>,
-    raster: &mut CoverageRaster,
+    raster: &CoverageRaster,
     nearest_reachable: &DistanceField,
-) -> Vec<Task> {
+    params: &PassParams,
+) -> Vec<Candidate> {
     let g = *space.geometry();
     let res = g.resolution;
     let half = space.robot.tool_width_m / 2.0;
-    let need = |raster: &CoverageRaster, i: usize| region.target_labels[i] == region.id && !raster.is_covered(i);
-    if !region.targets.iter().any(|&i| need(raster, i)) {
+    let need = |i: usize| region.target_labels[i] == region.id && !raster.is_covered(i);
+    if !region.targets.iter().any(|&i| need(i)) {
         return Vec::new();
     }
-    let mut tasks = Vec::new();
-    // 1. Contour stretches.
+    let mut out = Vec::new();
     let mut mask = vec![false; g.len()];
     for &i in region.cells {
         mask[i] = true;
     }
     let rc = (half / res).ceil() as isize;
-    let useful = |raster: &CoverageRaster, i: usize| -> bool {
+    // Uncovered targets within reach of a contour vertex.
+    let reach_of = |i: usize, f: &mut dyn FnMut(usize)| {
         let c = g.cell(i);
         let p = g.center(c);
         for dy in -rc..=rc {
             for dx in -rc..=rc {
                 if let Some(n) = g.offset(c, dx, dy) {
                     let j = g.index(n);
-                    if need(raster, j) && (g.center(n) - p).norm() <= half + 1e-9 {
-                        return true;
+                    if need(j) && (g.center(n) - p).norm() <= half + 1e-9 {
+                        f(j);
                     }
                 }
             }
         }
-        false
     };
+    let mut reached = vec![false; g.len()];
     let extend = rc.max(1) as usize;
-    let merge_gap = (4 * rc).max(2) as usize;
+    let merge_gap = (2 * rc).max(2) as usize;
+    let max_len = ((params.max_stretch_widths * 2.0 * half) / res).ceil().max(4.0) as usize;
     for lp in trace_loops(&g, &mask) {
         let n = lp.len();
         if n < 2 {
             continue;
         }
-        let flags: Vec<bool> = lp.iter().map(|&i| useful(raster, i)).collect();
+        let flags: Vec<bool> = lp
+            .iter()
+            .map(|&i| {
+                let mut any = false;
+                reach_of(i, &mut |j| {
+                    any = true;
+                    reached[j] = true;
+                });
+                any
+            })
+            .collect();
         if !flags.iter().any(|&f| f) {
             continue;
         }
-        // Grow each useful vertex by `extend` on both sides (cyclically), then close gaps up to `merge_gap`.
         let mut keep = vec![false; n];
         for k in (0..n).filter(|&k| flags[k]) {
-            for e in 0..=2 * extend {
+            for e in 0..=2 * extend.min(n) {
                 keep[(k + n + e - extend.min(n)) % n] = true;
             }
         }
         close_gaps(&mut keep, merge_gap);
         for run in cyclic_runs(&keep) {
-            let pts: Vec<Point2> = run.iter().map(|&k| g.center_of(lp[k])).collect();
-            for piece in split_unsafe_steps(space, &pts) {
-                let simple = simplify_polyline(&piece, 0.5 * res, &|a, b| space.segment_ok(a, b));
-                raster.stamp_polyline(&simple);
-                tasks.push(Task { points: simple, kind: TaskKind::Boundary });
+            for chunk in run.chunks(max_len) {
+                let pts: Vec<Point2> = chunk.iter().map(|&k| g.center_of(lp[k])).collect();
+                for piece in split_unsafe_steps(space, &pts) {
+                    let simple = simplify_polyline(&piece, 0.5 * res, &|a, b| space.segment_ok(a, b));
+                    out.push(Candidate {
+                        region: region.id,
+                        task: Task {
+                            points: simple,
+                            kind: TaskKind::Boundary,
+                        },
+                    });
+                }
             }
         }
     }
-    // 2. Visits for whatever is left.
     for &t in region.targets {
-        if !need(raster, t) {
+        if !need(t) || reached[t] {
             continue;
         }
-        let Some(r) = nearest_reachable.nearest_site_index(t) else { continue };
+        let Some(r) = nearest_reachable.nearest_site_index(t) else {
+            continue;
+        };
         let p = g.center_of(r);
-        raster.stamp_segment(p, p);
-        tasks.push(Task { points: vec![p], kind: TaskKind::Visit });
+        out.push(Candidate {
+            region: region.id,
+            task: Task {
+                points: vec![p],
+                kind: TaskKind::Visit,
+            },
+        });
     }
-    tasks
+    out
+}
+
+/// Greedy selection of candidates (see the module docs); stamps the chosen ones on `raster`.
+pub fn select(
+    space: &CoverageSpace,
+    mut pool: Vec<Candidate>,
+    raster: &mut CoverageRaster,
+    params: &PassParams,
+) -> Vec<Candidate> {
+    let g = *space.geometry();
+    let res = g.resolution;
+    let w = space.robot.tool_width_m;
+    let total = space.coverable_count().max(1);
+    let mut covered = (0..g.len())
+        .filter(|&i| space.coverable[i] && raster.is_covered(i))
+        .count();
+    // A lane covers w / res² new cells per metre; a candidate's cost is its length driven twice (there and
+    // back along the wall, in the worst case) plus a tool width to turn off and on the lane set.
+    let lane_yield = w / (res * res);
+    let gain = |raster: &CoverageRaster, t: &Task| -> usize {
+        let mut seen = std::collections::HashSet::new();
+        let pts = &t.points;
+        let segs: Vec<(Point2, Point2)> = if pts.len() == 1 {
+            vec![(pts[0], pts[0])]
+        } else {
+            pts.windows(2).map(|s| (s[0], s[1])).collect()
+        };
+        for (a, b) in segs {
+            for_each_cell_in_capsule(&g, a, b, w / 2.0 + 1e-9, |i| {
+                if space.coverable[i] && !raster.is_covered(i) {
+                    seen.insert(i);
+                }
+            });
+        }
+        seen.len()
+    };
+    let cost = |t: &Task| 2.0 * t.length() + w;
+    let mut chosen = Vec::new();
+    // Lazy greedy: yields only fall as coverage grows, so a stale upper bound that still tops the heap after
+    // a refresh is the true best.
+    let mut yields: Vec<f64> = pool
+        .iter()
+        .map(|c| gain(raster, &c.task) as f64 / cost(&c.task))
+        .collect();
+    while let Some(best) = (0..pool.len())
+        .filter(|&k| yields[k] > 0.0)
+        .max_by(|&a, &b| yields[a].total_cmp(&yields[b]))
+    {
+        let cells = gain(raster, &pool[best].task);
+        let fresh = cells as f64 / cost(&pool[best].task);
+        if fresh + 1e-12 < yields[best] {
+            yields[best] = fresh;
+            continue;
+        }
+        let pct = covered as f64 / total as f64 * 100.0;
+        if fresh < params.min_yield * lane_yield && pct >= params.coverage_target_pct {
+            break;
+        }
+        let c = pool.swap_remove(best);
+        yields.swap_remove(best);
+        raster.stamp_polyline(&c.task.points);
+        covered += cells;
+        chosen.push(c);
+    }
+    chosen
 }
 
 /// Sets `keep` over every run of `false` (cyclic) no longer than `gap` that lies between kept vertices.
@@ -131,7 +255,9 @@ fn cyclic_runs(keep: &[bool]) -> Vec<Vec<usize>> {
         all.push(0);
         return vec![all];
     }
-    let Some(start) = (0..n).find(|&k| !keep[k]) else { return Vec::new() };
+    let Some(start) = (0..n).find(|&k| !keep[k]) else {
+        return Vec::new();
+    };
     let mut runs = Vec::new();
     let mut cur: Vec<usize> = Vec::new();
     for k in 1..=n {
@@ -153,10 +279,10 @@ fn split_unsafe_steps(space: &CoverageSpace, pts: &[Point2]) -> Vec<Vec<Point2>>
     let mut out = Vec::new();
     let mut cur: Vec<Point2> = Vec::new();
     for &p in pts {
-        if let Some(&last) = cur.last() {
-            if !space.segment_ok(last, p) {
-                out.push(std::mem::take(&mut cur));
-            }
+        if let Some(&last) = cur.last()
+            && !space.segment_ok(last, p)
+        {
+            out.push(std::mem::take(&mut cur));
         }
         cur.push(p);
     }
@@ -174,7 +300,10 @@ mod tests {
     fn gaps_and_runs() {
         let mut keep = vec![true, false, false, true, false, false, false, false, true, true];
         close_gaps(&mut keep, 2);
-        assert_eq!(keep, vec![true, true, true, true, false, false, false, false, true, true]);
+        assert_eq!(
+            keep,
+            vec![true, true, true, true, false, false, false, false, true, true]
+        );
         let runs = cyclic_runs(&keep);
         assert_eq!(runs, vec![vec![8, 9, 0, 1, 2, 3]]);
         assert_eq!(cyclic_runs(&[true, true]), vec![vec![0, 1, 0]]);

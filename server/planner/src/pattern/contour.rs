@@ -14,7 +14,10 @@ pub fn trace_loops(g: &GridGeometry, mask: &[bool]) -> Vec<Vec<usize>> {
     let inside = |c: Option<Cell>| c.is_some_and(|c| mask[g.index(c)]);
     let is_boundary = |i: usize| {
         let c = g.cell(i);
-        mask[i] && [(0, 1), (0, -1), (1, 0), (-1, 0)].iter().any(|&(dx, dy)| !inside(g.offset(c, dx, dy)))
+        mask[i]
+            && [(0, 1), (0, -1), (1, 0), (-1, 0)]
+                .iter()
+                .any(|&(dx, dy)| !inside(g.offset(c, dx, dy)))
     };
     let mut visited = vec![false; g.len()];
     let mut loops = Vec::new();
@@ -24,7 +27,10 @@ pub fn trace_loops(g: &GridGeometry, mask: &[bool]) -> Vec<Vec<usize>> {
         }
         let start = g.cell(s);
         // Backtrack direction: an outside 4-neighbour.
-        let Some(b0) = [0usize, 2, 4, 6].into_iter().find(|&k| !inside(g.offset(start, RING[k].0, RING[k].1))) else {
+        let Some(b0) = [0usize, 2, 4, 6]
+            .into_iter()
+            .find(|&k| !inside(g.offset(start, RING[k].0, RING[k].1)))
+        else {
             continue;
         };
         let mut out = vec![s];
@@ -43,7 +49,9 @@ pub fn trace_loops(g: &GridGeometry, mask: &[bool]) -> Vec<Vec<usize>> {
                 }
             }
             let Some(dir) = found else { break }; // isolated cell
-            let Some(next) = g.offset(cur, RING[dir].0, RING[dir].1) else { break };
+            let Some(next) = g.offset(cur, RING[dir].0, RING[dir].1) else {
+                break;
+            };
             if let Some(fm) = first_move {
                 if cur == start && fm == (next, dir) {
                     break;
@@ -94,7 +102,10 @@ mod tests {
         }
         // Outer ring of a 10×10 block has 36 cells; the hole's ring the 12 cells around the 2×2 hole
         // (4-boundary cells only: 8 edge neighbours + 4 corners reached diagonally are not 4-boundary).
-        let mut sizes: Vec<_> = loops.iter().map(|l| l.iter().collect::<std::collections::HashSet<_>>().len()).collect();
+        let mut sizes: Vec<_> = loops
+            .iter()
+            .map(|l| l.iter().collect::<std::collections::HashSet<_>>().len())
+            .collect();
         sizes.sort_unstable();
         assert_eq!(sizes[1], 36);
         assert!(sizes[0] >= 8 && sizes[0] <= 12, "{sizes:?}");

@@ -19,18 +19,14 @@ use crate::geom::{Point2, Vector2, direction};
 use crate::space::CoverageSpace;
 
 /// Lane generation knobs.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct LaneParams {
     /// Cost of one lane segment's pair of turns, in metres of straight driving. `None`: 2 × tool width.
     pub turn_cost_m: Option<f64>,
     /// Fixed sweep direction (radians) instead of choosing one.
     pub fixed_angle_rad: Option<f64>,
-}
-
-impl Default for LaneParams {
-    fn default() -> Self {
-        Self { turn_cost_m: None, fixed_angle_rad: None }
-    }
+    /// Lane placement; `None` lets the pipeline plan with each and keep the shorter plan.
+    pub placement: Option<Placement>,
 }
 
 /// One region's cells and cover targets.
@@ -51,8 +47,19 @@ pub struct RegionView<'a> {
 /// Lanes of a region along its best direction; returns the angle (radians) and the lane segments in sweep
 /// order (by lane, then along the lane).
 pub fn plan_lanes(space: &CoverageSpace, region: RegionView<'_>, params: &LaneParams) -> (f64, Vec<Task>) {
-    let angle = params.fixed_angle_rad.unwrap_or_else(|| best_angle(space, region, params));
-    (angle, lanes_at(space, region, angle, true))
+    let angle = params
+        .fixed_angle_rad
+        .unwrap_or_else(|| best_angle(space, region, params));
+    (
+        angle,
+        lanes_at(
+            space,
+            region,
+            angle,
+            true,
+            params.placement.unwrap_or(Placement::Lattice),
+        ),
+    )
 }
 
 /// Candidate sweep directions for a region, radians in [0, π).
@@ -80,14 +87,16 @@ pub fn candidate_angles(space: &CoverageSpace, region: RegionView<'_>) -> Vec<f6
         let t = (gy.atan2(gx) + PI / 2.0).rem_euclid(PI);
         hist[(t.to_degrees().round() as usize) % 180] += mag;
     }
-    let smooth: Vec<f64> = (0..180).map(|k| (0..7).map(|j| hist[(k + 180 + j - 3) % 180]).sum()).collect();
+    let smooth: Vec<f64> = (0..180)
+        .map(|k| (0..7).map(|j| hist[(k + 180 + j - 3) % 180]).sum())
+        .collect();
     let mut angles: Vec<f64> = vec![0.0, PI / 4.0, PI / 2.0, 3.0 * PI / 4.0];
-    if let Some((k, &v)) = smooth.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)) {
-        if v > 0.0 {
-            let t = (k as f64).to_radians();
-            angles.push(t);
-            angles.push((t + PI / 2.0).rem_euclid(PI));
-        }
+    if let Some((k, &v)) = smooth.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1))
+        && v > 0.0
+    {
+        let t = (k as f64).to_radians();
+        angles.push(t);
+        angles.push((t + PI / 2.0).rem_euclid(PI));
     }
     let mut out: Vec<f64> = Vec::new();
     for a in angles {
@@ -107,27 +116,55 @@ fn best_angle(space: &CoverageSpace, region: RegionView<'_>, params: &LaneParams
     candidate_angles(space, region)
         .into_iter()
         .map(|a| {
-            let lanes = lanes_at(space, region, a, false);
-            let len: f64 = lanes.iter().map(Task::length).sum();
-            let steps: f64 = lanes.windows(2).map(|p| {
-                let (e, s) = (p[0].points[p[0].points.len() - 1], p[1].points[0]);
-                (e - s).norm().min((p[0].points[0] - s).norm())
-            }).sum();
-            (a, len + steps + turn * lanes.len() as f64)
+            (
+                a,
+                sweep_cost(&lanes_at(space, region, a, false, Placement::Lattice), turn),
+            )
         })
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .map_or(0.0, |(a, _)| a)
 }
 
+/// Estimated cost of sweeping `lanes` in order: their length, the steps between them, and `turn` per lane.
+fn sweep_cost(lanes: &[Task], turn: f64) -> f64 {
+    let len: f64 = lanes.iter().map(Task::length).sum();
+    let steps: f64 = lanes
+        .windows(2)
+        .map(|p| {
+            let (e, s) = (p[0].points[p[0].points.len() - 1], p[1].points[0]);
+            (e - s).norm().min((p[0].points[0] - s).norm())
+        })
+        .sum();
+    len + steps + turn * lanes.len() as f64
+}
+
+/// Where lanes sit across the sweep direction.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Placement {
+    /// On the map-wide lattice of offsets `k · tool_width` (shared with every region of the same direction).
+    Lattice,
+    /// Fitted to the region alone, evenly spaced.
+    Fit,
+}
+
 /// Lanes along `angle`. `exact`: sample every half cell with the exact clearance and refine lane ends by
 /// bisection; otherwise a cheap cell-centre estimate for choosing the direction.
-pub fn lanes_at(space: &CoverageSpace, region: RegionView<'_>, angle: f64, exact: bool) -> Vec<Task> {
+pub fn lanes_at(
+    space: &CoverageSpace,
+    region: RegionView<'_>,
+    angle: f64,
+    exact: bool,
+    placement: Placement,
+) -> Vec<Task> {
     let g = space.geometry();
     let res = g.resolution;
     let w = space.robot.tool_width_m;
     let d = direction(angle);
     let n = Vector2::new(-d.y, d.x);
-    let origin = g.center_of(region.cells[0]);
+    // Offsets are measured from the map frame's origin so that every region sweeping in the same direction
+    // shares one lattice of lanes, `w` apart: neighbouring regions continue each other's lanes instead of
+    // each rounding its own lane count up at their common border.
+    let origin = Point2::origin();
     let uv = |p: Point2| ((p - origin).dot(&d), (p - origin).dot(&n));
     let (mut umin, mut umax, mut vmin, mut vmax) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
     for &i in region.cells {
@@ -140,24 +177,85 @@ pub fn lanes_at(space: &CoverageSpace, region: RegionView<'_>, angle: f64, exact
         (tmin, tmax) = (tmin.min(v), tmax.max(v));
     }
     let half = w / 2.0;
-    let mut v0 = (tmin + half).max(vmin).min(vmax);
-    let mut v1 = (tmax - half).min(vmax).max(vmin);
-    if v1 < v0 {
-        let m = 0.5 * (v0 + v1);
-        (v0, v1) = (m, m);
+    // Lanes keep the clearance r plus the depth of the scallops that a wall of cell centres leaves in the
+    // iso-clearance line (≈ res² / 8r, doubled): then lanes along a wall, and the step from one lane end to
+    // the next along a wall across them, keep the clearance too.
+    let margin = res * res / (4.0 * space.robot.radius_m);
+    let (vlo, vhi) = if vmax - vmin > 2.0 * margin { (vmin + margin, vmax - margin) } else { (vmin, vmax) };
+    // A side where cover targets lie beyond the region's own cells is a wall side: the outermost lane moves
+    // onto the outermost cells there. Elsewhere the region owns the lattice lanes in its half-open offset
+    // range [vmin - res/2, vmax + res/2), exactly tiling it with its neighbours.
+    // A side is a wall side when most of the region's outermost cells on that side touch unreachable space.
+    let (mut low, mut low_wall, mut high, mut high_wall) = (0usize, 0usize, 0usize, 0usize);
+    for &i in region.cells {
+        let (_, v) = uv(g.center_of(i));
+        let (is_low, is_high) = (v <= vmin + res, v >= vmax - res);
+        if !(is_low || is_high) {
+            continue;
+        }
+        let walled =
+            g.neighbors4(g.cell(i)).count() < 4 || g.neighbors4(g.cell(i)).any(|c| !space.reachable[g.index(c)]);
+        if is_low {
+            low += 1;
+            low_wall += usize::from(walled);
+        }
+        if is_high {
+            high += 1;
+            high_wall += usize::from(walled);
+        }
     }
-    let count = if v1 - v0 < 1e-9 { 1 } else { ((v1 - v0) / w - 1e-9).ceil() as usize + 1 };
-    let spacing = if count > 1 { (v1 - v0) / (count - 1) as f64 } else { 0.0 };
-    // Lane ends stop where the clearance is r plus the depth of the scallops that a wall of cell centres
-    // leaves in the iso-clearance line (≈ res² / 8r, doubled): then the step from one lane end to the next
-    // along a straight wall keeps the clearance too.
-    let end_clearance = space.robot.radius_m + res * res / (4.0 * space.robot.radius_m);
+    let wall_low = tmin < vmin - 0.5 * res && 2 * low_wall >= low;
+    let wall_high = tmax > vmax + 0.5 * res && 2 * high_wall >= high;
+    let kmin = if wall_low {
+        ((tmin - half) / w - 1e-9).ceil()
+    } else {
+        ((vmin - 0.5 * res) / w - 1e-9).ceil()
+    };
+    let kmax = if wall_high {
+        ((tmax + half) / w + 1e-9).floor()
+    } else {
+        ((vmax + 0.5 * res) / w - 1e-9).floor()
+    };
+    let mut lattice: Vec<f64> = Vec::new();
+    let mut k = kmin;
+    while k <= kmax {
+        let v = (k * w).clamp(vlo, vhi);
+        if lattice.last().is_none_or(|&last| v - last > 1e-6) {
+            lattice.push(v);
+        }
+        k += 1.0;
+    }
+    if lattice.is_empty() {
+        // A sliver between two lattice lanes: one lane through its middle.
+        lattice.push(0.5 * (vmin + vmax));
+    }
+    // The alternative: lanes fitted to this region alone, evenly spaced at most `w` apart between its
+    // outermost needed offsets. Better where the region's neighbours sweep in other directions.
+    let fit = {
+        let mut v0 = (tmin + half).max(vlo).min(vhi);
+        let mut v1 = (tmax - half).min(vhi).max(vlo);
+        if v1 < v0 {
+            let m = 0.5 * (v0 + v1);
+            (v0, v1) = (m, m);
+        }
+        let count = if v1 - v0 < 1e-9 {
+            1
+        } else {
+            ((v1 - v0) / w - 1e-9).ceil() as usize + 1
+        };
+        let spacing = if count > 1 { (v1 - v0) / (count - 1) as f64 } else { 0.0 };
+        (0..count).map(|k| v0 + spacing * k as f64).collect::<Vec<f64>>()
+    };
+    let offsets = match placement {
+        Placement::Lattice => lattice,
+        Placement::Fit => fit,
+    };
+    let end_clearance = space.robot.radius_m + margin;
     let ok = |p: Point2| -> bool {
         match g.locate(p) {
             Some(c) => {
                 let i = g.index(c);
-                region.labels[i] == region.id
-                    && (!exact || space.clearance_at(p) >= end_clearance)
+                region.labels[i] == region.id && (!exact || space.clearance_at(p) >= end_clearance)
             }
             None => false,
         }
@@ -165,8 +263,7 @@ pub fn lanes_at(space: &CoverageSpace, region: RegionView<'_>, angle: f64, exact
     let step = if exact { res * 0.5 } else { res };
     let at = |u: f64, v: f64| origin + d * u + n * v;
     let mut tasks = Vec::new();
-    for k in 0..count {
-        let v = v0 + spacing * k as f64;
+    for &v in &offsets {
         let mut u = umin - res;
         let mut run_start: Option<f64> = None;
         let mut last_ok = u;
@@ -177,13 +274,23 @@ pub fn lanes_at(space: &CoverageSpace, region: RegionView<'_>, angle: f64, exact
                 }
                 last_ok = u;
             } else if let Some(s) = run_start.take() {
-                let e = if exact { refine(&ok, &at, v, u, last_ok) } else { last_ok };
-                tasks.push(Task { points: vec![at(s, v), at(e, v)], kind: TaskKind::Lane });
+                let e = if exact {
+                    refine(&ok, &at, v, u, last_ok)
+                } else {
+                    last_ok
+                };
+                tasks.push(Task {
+                    points: vec![at(s, v), at(e, v)],
+                    kind: TaskKind::Lane,
+                });
             }
             u += step;
         }
         if let Some(s) = run_start {
-            tasks.push(Task { points: vec![at(s, v), at(last_ok, v)], kind: TaskKind::Lane });
+            tasks.push(Task {
+                points: vec![at(s, v), at(last_ok, v)],
+                kind: TaskKind::Lane,
+            });
         }
     }
     if exact {
@@ -230,34 +337,54 @@ mod tests {
     use crate::space::RobotShape;
 
     fn space_with(grid: OccupancyGrid) -> CoverageSpace {
-        CoverageSpace::new(grid, RobotShape { radius_m: 0.15, tool_width_m: 0.3 }, Point2::new(0.5, 0.5)).expect("ok")
+        CoverageSpace::new(
+            grid,
+            RobotShape {
+                radius_m: 0.15,
+                tool_width_m: 0.3,
+            },
+            Point2::new(0.5, 0.5),
+        )
+        .expect("ok")
     }
 
-    fn whole(space: &CoverageSpace) -> (Vec<u32>, Vec<usize>, Vec<usize>) {
+    fn whole(space: &CoverageSpace) -> (Vec<u32>, Vec<u32>, Vec<usize>, Vec<usize>) {
         let g = space.geometry();
         let labels: Vec<u32> = (0..g.len()).map(|i| if space.reachable[i] { 0 } else { u32::MAX }).collect();
+        let target_labels: Vec<u32> = (0..g.len()).map(|i| if space.coverable[i] { 0 } else { u32::MAX }).collect();
         let cells: Vec<usize> = (0..g.len()).filter(|&i| space.reachable[i]).collect();
         let targets: Vec<usize> = (0..g.len()).filter(|&i| space.coverable[i]).collect();
-        (labels, cells, targets)
+        (labels, target_labels, cells, targets)
     }
 
     #[test]
     fn long_room_gets_lanes_along_its_length() {
         let g = GridGeometry::new(80, 20, 0.05, Point2::origin()).expect("valid");
         let space = space_with(OccupancyGrid::filled(g, CellState::Free));
-        let (labels, cells, targets) = whole(&space);
-        let view = RegionView { id: 0, labels: &labels, target_labels: &labels, cells: &cells, targets: &targets };
+        let (labels, target_labels, cells, targets) = whole(&space);
+        let view = RegionView {
+            id: 0,
+            labels: &labels,
+            target_labels: &target_labels,
+            cells: &cells,
+            targets: &targets,
+        };
         let (angle, lanes) = plan_lanes(&space, view, &LaneParams::default());
         assert!(angle.sin().abs() < 1e-6, "lanes along x, got {angle}");
-        // 1 m wide room, reachable y in [0.175, 0.825]: 0.65 m / 0.3 → 4 lanes (3.17 rounds up, plus one).
-        assert_eq!(lanes.len(), 4);
+        // 1 m wide room, reachable y in [0.175, 0.825], walls on both sides: the outermost lanes sit on the
+        // outermost reachable rows, the lattice fills between: 4 lanes (3.33 tool widths of cover).
+        assert_eq!(lanes.len(), 4, "{lanes:?}");
         for t in &lanes {
             assert!(space.segment_ok(t.points[0], t.points[1]));
             assert_eq!(t.points.len(), 2);
         }
         let mut all = Vec::new();
         for (k, t) in lanes.iter().enumerate() {
-            if k % 2 == 0 { all.extend(t.points.iter().copied()) } else { all.extend(t.points.iter().rev().copied()) }
+            if k % 2 == 0 {
+                all.extend(t.points.iter().copied())
+            } else {
+                all.extend(t.points.iter().rev().copied())
+            }
         }
         for s in all.windows(2) {
             assert!(space.segment_ok(s[0], s[1]), "step {s:?} keeps clearance");
@@ -273,11 +400,20 @@ mod tests {
         let mut grid = OccupancyGrid::filled(g, CellState::Free);
         grid.fill_rect(1.3, 0.8, 1.7, 1.2, CellState::Occupied);
         let space = space_with(grid);
-        let (labels, cells, targets) = whole(&space);
-        let view = RegionView { id: 0, labels: &labels, target_labels: &labels, cells: &cells, targets: &targets };
-        let lanes = lanes_at(&space, view, 0.0, true);
+        let (labels, target_labels, cells, targets) = whole(&space);
+        let view = RegionView {
+            id: 0,
+            labels: &labels,
+            target_labels: &target_labels,
+            cells: &cells,
+            targets: &targets,
+        };
+        let lanes = lanes_at(&space, view, 0.0, true, Placement::Fit);
         // Lanes at the pillar's height are split into two segments each.
-        let split = lanes.iter().filter(|t| t.points[0].y > 0.6 && t.points[0].y < 1.4).count();
+        let split = lanes
+            .iter()
+            .filter(|t| t.points[0].y > 0.6 && t.points[0].y < 1.4)
+            .count();
         let rows: std::collections::BTreeSet<i64> =
             lanes.iter().map(|t| (t.points[0].y * 1000.0).round() as i64).collect();
         assert!(lanes.len() > rows.len(), "some lanes split");

@@ -25,8 +25,12 @@ pub fn plan_rings(space: &CoverageSpace, region: RegionView<'_>) -> Vec<Task> {
         return Vec::new();
     }
     let (bw, bh) = (x1 - x0 + 1, y1 - y0 + 1);
-    let Ok(sub) = GridGeometry::new(bw, bh, res, g.center(crate::map::Cell::new(x0, y0)) - nalgebra::Vector2::new(res / 2.0, res / 2.0))
-    else {
+    let Ok(sub) = GridGeometry::new(
+        bw,
+        bh,
+        res,
+        g.center(crate::map::Cell::new(x0, y0)) - nalgebra::Vector2::new(res / 2.0, res / 2.0),
+    ) else {
         return Vec::new();
     };
     let global = |j: usize| (y0 + j / bw) * g.width + x0 + j % bw;
@@ -49,15 +53,18 @@ pub fn plan_rings(space: &CoverageSpace, region: RegionView<'_>) -> Vec<Task> {
             let flush = |piece: &mut Vec<Point2>, tasks: &mut Vec<Task>| {
                 if !piece.is_empty() {
                     let simple = simplify_polyline(piece, 0.5 * res, &|a, b| space.segment_ok(a, b));
-                    tasks.push(Task { points: simple, kind: TaskKind::Ring });
+                    tasks.push(Task {
+                        points: simple,
+                        kind: TaskKind::Ring,
+                    });
                     piece.clear();
                 }
             };
             for p in pts {
-                if let Some(&last) = piece.last() {
-                    if !space.segment_ok(last, p) {
-                        flush(&mut piece, &mut tasks);
-                    }
+                if let Some(&last) = piece.last()
+                    && !space.segment_ok(last, p)
+                {
+                    flush(&mut piece, &mut tasks);
                 }
                 piece.push(p);
             }

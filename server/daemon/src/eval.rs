@@ -1,0 +1,134 @@
+//! `shiftd eval`: every decomposition × order (default pattern) and the three baselines on every scene of a
+//! folder, as one table (or JSON lines), optionally rendering each plan.
+
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::Result;
+use serde::Serialize;
+use shift_planner::baseline::{Baseline, run_baseline};
+use shift_planner::decompose::DecompositionMethod;
+use shift_planner::geom::Point2;
+use shift_planner::order::OrderMethod;
+use shift_planner::pipeline::{NoMonitor, PlanOutput, PlanParams, plan};
+use shift_planner::space::{CoverageSpace, RobotShape};
+
+use crate::render::render_png;
+use crate::scene_io::{load_scene, scene_dirs};
+
+/// One row of the evaluation.
+#[derive(Debug, Clone, Serialize)]
+pub struct EvalRow {
+    /// Scene name.
+    pub scene: String,
+    /// Decomposition (or `none` for baselines).
+    pub decomposition: String,
+    /// Order solver (or the baseline's name).
+    pub order: String,
+    /// Pattern.
+    pub pattern: String,
+    /// Coverage, percent.
+    pub coverage_pct: f64,
+    /// Overlap, percent.
+    pub overlap_pct: f64,
+    /// Length, metres.
+    pub length_m: f64,
+    /// Turns.
+    pub turns: usize,
+    /// Compute time, milliseconds.
+    pub compute_ms: f64,
+    /// Collisions.
+    pub collisions: usize,
+}
+
+/// Builds the coverage space of a loaded scene.
+pub fn scene_space(dir: &Path) -> Result<(String, CoverageSpace)> {
+    let s = load_scene(dir)?;
+    let robot = RobotShape {
+        radius_m: s.scene.robot_radius,
+        tool_width_m: s.scene.tool_width,
+    };
+    let space = CoverageSpace::new(s.map.grid, robot, Point2::new(s.scene.start[0], s.scene.start[1]))?;
+    Ok((s.name, space))
+}
+
+/// Runs the evaluation over every scene under `root`.
+pub fn run_eval(root: &Path, render: Option<&Path>, mut on_row: impl FnMut(&EvalRow)) -> Result<Vec<EvalRow>> {
+    let mut rows = Vec::new();
+    if let Some(dir) = render {
+        std::fs::create_dir_all(dir)?;
+    }
+    for dir in scene_dirs(root)? {
+        let (name, space) = scene_space(&dir)?;
+        let mut emit = |decomposition: &str, order: &str, pattern: &str, out: &PlanOutput, ms: f64| -> Result<()> {
+            let m = out.metrics;
+            let row = EvalRow {
+                scene: name.clone(),
+                decomposition: decomposition.into(),
+                order: order.into(),
+                pattern: pattern.into(),
+                coverage_pct: m.coverage_pct,
+                overlap_pct: m.overlap_pct,
+                length_m: m.length_m,
+                turns: m.turns,
+                compute_ms: ms,
+                collisions: m.collisions,
+            };
+            if let Some(dir) = render {
+                render_png(
+                    &space,
+                    out,
+                    &dir.join(format!("{name}-{decomposition}-{order}-{pattern}.png")),
+                    900,
+                )?;
+            }
+            on_row(&row);
+            rows.push(row);
+            Ok(())
+        };
+        let mut default_len = 0.0;
+        for d in DecompositionMethod::ALL {
+            for o in OrderMethod::ALL {
+                let params = PlanParams {
+                    decomposition: d,
+                    order: o,
+                    ..PlanParams::default()
+                };
+                let t = Instant::now();
+                let out = plan(&space, &params, &mut NoMonitor)?;
+                let ms = t.elapsed().as_secs_f64() * 1e3;
+                if d == DecompositionMethod::default() && o == OrderMethod::default() {
+                    default_len = out.metrics.length_m;
+                }
+                emit(d.name(), o.name(), params.pattern.name(), &out, ms)?;
+            }
+        }
+        for b in Baseline::ALL {
+            let t = Instant::now();
+            let out = run_baseline(&space, b, 1, default_len)?;
+            let ms = t.elapsed().as_secs_f64() * 1e3;
+            emit("none", b.name(), "baseline", &out, ms)?;
+        }
+    }
+    Ok(rows)
+}
+
+/// The table header.
+pub const TABLE_HEADER: &str = "scene                 decomposition order        pattern    coverage%  overlap%   length_m  turns  compute_ms  collisions";
+
+/// One table line.
+pub fn table_line(r: &EvalRow) -> String {
+    format!(
+        "{:<21} {:<13} {:<12} {:<10} {:>9.2} {:>9.2} {:>10.1} {:>6} {:>11.1} {:>11}",
+        r.scene,
+        r.decomposition,
+        r.order,
+        r.pattern,
+        r.coverage_pct,
+        r.overlap_pct,
+        r.length_m,
+        r.turns,
+        r.compute_ms,
+        r.collisions
+    )
+}

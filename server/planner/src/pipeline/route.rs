@@ -1,0 +1,382 @@
+//! Inside one region: the order of its tasks from a given entry, and the region's entry/exit options for
+//! the visiting-order problem (each region may be entered at any corner of its lane set; a route may also be
+//! driven backwards).
+
+use crate::geom::{Point2, Vector2, direction};
+use crate::order::{DistanceMatrix, OrderMethod, SolveBudget, TourOption, TourProblem};
+use crate::pattern::Task;
+
+/// One task as driven: which task, from which vertex, in which direction.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Leg {
+    /// Index into the region's tasks.
+    pub task: usize,
+    /// Drive the vertices backwards.
+    pub reversed: bool,
+    /// For closed tasks: the vertex where the loop starts and ends.
+    pub start_vertex: usize,
+}
+
+impl Leg {
+    /// The vertices of this leg in driving order.
+    pub fn points(&self, tasks: &[Task]) -> Vec<Point2> {
+        let t = &tasks[self.task];
+        let mut pts = if t.is_closed() {
+            let body = &t.points[..t.points.len() - 1];
+            let n = body.len();
+            let mut v: Vec<Point2> = (0..=n).map(|k| body[(self.start_vertex + k) % n]).collect();
+            if self.reversed {
+                v.reverse();
+            }
+            return v;
+        } else {
+            t.points.clone()
+        };
+        if self.reversed {
+            pts.reverse();
+        }
+        pts
+    }
+}
+
+/// A region's route from one entry: legs in order, entry and exit points, length (tasks plus straight
+/// connections; real connections are linked later).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RegionRoute {
+    /// Legs in driving order.
+    pub legs: Vec<Leg>,
+    /// First point.
+    pub entry: Point2,
+    /// Last point.
+    pub exit: Point2,
+    /// Estimated length, metres.
+    pub cost: f64,
+}
+
+impl RegionRoute {
+    /// The same route driven backwards.
+    /// A reversed closed loop that started at vertex s still starts (and ends) at s.
+    pub fn reversed(&self) -> Self {
+        let legs = self
+            .legs
+            .iter()
+            .rev()
+            .map(|l| Leg {
+                reversed: !l.reversed,
+                ..*l
+            })
+            .collect();
+        Self {
+            legs,
+            entry: self.exit,
+            exit: self.entry,
+            cost: self.cost,
+        }
+    }
+}
+
+/// Options of one task: (entry, exit, leg).
+fn task_options(tasks: &[Task], k: usize) -> Vec<(Point2, Point2, Leg)> {
+    let t = &tasks[k];
+    if t.is_closed() {
+        let n = t.points.len() - 1;
+        let mut starts: Vec<usize> = (0..4).map(|q| q * n / 4).collect();
+        starts.dedup();
+        starts
+            .into_iter()
+            .flat_map(|s| {
+                [false, true].map(|rev| {
+                    (
+                        t.points[s],
+                        t.points[s],
+                        Leg {
+                            task: k,
+                            reversed: rev,
+                            start_vertex: s,
+                        },
+                    )
+                })
+            })
+            .collect()
+    } else {
+        let (a, b) = (t.points[0], t.points[t.points.len() - 1]);
+        vec![
+            (
+                a,
+                b,
+                Leg {
+                    task: k,
+                    reversed: false,
+                    start_vertex: 0,
+                },
+            ),
+            (
+                b,
+                a,
+                Leg {
+                    task: k,
+                    reversed: true,
+                    start_vertex: 0,
+                },
+            ),
+        ]
+    }
+}
+
+/// Orders `tasks` as an open tour starting at `entry` (Euclidean connection estimates): the better of the
+/// local-search tour and the plain sweep order (lanes by offset, nearest end first, other tasks inserted
+/// where they cost least) — local search from a nearest-neighbour start can miss the zigzag that is optimal
+/// for a monotone region.
+pub fn route_from(
+    tasks: &[Task],
+    angle: f64,
+    entry: Point2,
+    seed: u64,
+    iterations: u64,
+    stop: Option<&dyn Fn() -> bool>,
+) -> RegionRoute {
+    let searched = route_search(tasks, entry, seed, iterations, stop);
+    let swept = route_sweep(tasks, angle, entry);
+    if swept.cost + 1e-9 < searched.cost {
+        swept
+    } else {
+        searched
+    }
+}
+
+/// Cost of driving `legs` from `entry`: task lengths plus straight connections.
+fn legs_cost(tasks: &[Task], entry: Point2, legs: &[Leg]) -> f64 {
+    let mut at = entry;
+    let mut cost = 0.0;
+    for l in legs {
+        let pts = l.points(tasks);
+        cost += (pts[0] - at).norm() + tasks[l.task].length();
+        at = *pts.last().unwrap_or(&at);
+    }
+    cost
+}
+
+/// The sweep order: lanes sorted by their offset across the sweep direction (then along it), each driven from
+/// its end nearest to the current position; every other task is inserted where it adds the least.
+fn route_sweep(tasks: &[Task], angle: f64, entry: Point2) -> RegionRoute {
+    let d = direction(angle);
+    let n = Vector2::new(-d.y, d.x);
+    let mut lanes: Vec<usize> = (0..tasks.len())
+        .filter(|&k| tasks[k].kind == crate::pattern::TaskKind::Lane)
+        .collect();
+    let key = |k: usize| {
+        let p = tasks[k].points[0];
+        ((p.coords.dot(&n) * 1e4).round() as i64, p.coords.dot(&d))
+    };
+    lanes.sort_by(|&a, &b| {
+        let (ka, kb) = (key(a), key(b));
+        ka.0.cmp(&kb.0).then(ka.1.total_cmp(&kb.1))
+    });
+    // Start from whichever end of the lane stack is nearer the entry.
+    let first_near = |ls: &[usize]| {
+        ls.first().map_or(f64::INFINITY, |&k| {
+            let t = &tasks[k];
+            (t.points[0] - entry)
+                .norm()
+                .min((t.points[t.points.len() - 1] - entry).norm())
+        })
+    };
+    let mut rev_lanes = lanes.clone();
+    rev_lanes.reverse();
+    if first_near(&rev_lanes) < first_near(&lanes) {
+        lanes = rev_lanes;
+    }
+    let mut legs: Vec<Leg> = Vec::with_capacity(tasks.len());
+    let mut at = entry;
+    for k in lanes {
+        let t = &tasks[k];
+        let (a, b) = (t.points[0], t.points[t.points.len() - 1]);
+        let reversed = (b - at).norm() < (a - at).norm();
+        legs.push(Leg {
+            task: k,
+            reversed,
+            start_vertex: 0,
+        });
+        at = if reversed { a } else { b };
+    }
+    for k in (0..tasks.len()).filter(|&k| tasks[k].kind != crate::pattern::TaskKind::Lane) {
+        let mut best: Option<(f64, usize, Leg)> = None;
+        for (_, _, leg) in task_options(tasks, k) {
+            for pos in 0..=legs.len() {
+                legs.insert(pos, leg);
+                let c = legs_cost(tasks, entry, &legs);
+                legs.remove(pos);
+                if best.is_none_or(|(bc, _, _)| c < bc) {
+                    best = Some((c, pos, leg));
+                }
+            }
+        }
+        if let Some((_, pos, leg)) = best {
+            legs.insert(pos, leg);
+        }
+    }
+    let cost = legs_cost(tasks, entry, &legs);
+    let exit = legs.last().map_or(entry, |l| *l.points(tasks).last().unwrap_or(&entry));
+    RegionRoute {
+        legs,
+        entry,
+        exit,
+        cost,
+    }
+}
+
+/// Local search over the tasks (generalised TSP, open tour from `entry`).
+fn route_search(
+    tasks: &[Task],
+    entry: Point2,
+    seed: u64,
+    iterations: u64,
+    stop: Option<&dyn Fn() -> bool>,
+) -> RegionRoute {
+    let mut points = vec![entry];
+    let mut legs_of: Vec<Vec<Leg>> = Vec::with_capacity(tasks.len());
+    let mut nodes = Vec::with_capacity(tasks.len());
+    for k in 0..tasks.len() {
+        let opts = task_options(tasks, k);
+        let len = tasks[k].length();
+        let mut node = Vec::new();
+        let mut legs = Vec::new();
+        for (entry_p, exit_p, leg) in &opts {
+            let e = points.len();
+            points.push(*entry_p);
+            points.push(*exit_p);
+            node.push(TourOption {
+                entry: e,
+                exit: e + 1,
+                cost: len,
+                reverse: 0,
+            });
+            legs.push(*leg);
+        }
+        // Reverse pairs: options come in (forward, backward) pairs.
+        for (j, o) in node.iter_mut().enumerate() {
+            o.reverse = j ^ 1;
+        }
+        nodes.push(node);
+        legs_of.push(legs);
+    }
+    let dist = DistanceMatrix::from_fn(points.len(), |i, j| (points[i] - points[j]).norm());
+    let problem = TourProblem {
+        dist,
+        depot: 0,
+        nodes,
+        closed: false,
+    };
+    let tour = OrderMethod::TwoOpt.orderer().solve(
+        &problem,
+        seed,
+        &SolveBudget {
+            max_iterations: iterations,
+            stop,
+        },
+    );
+    let legs: Vec<Leg> = tour
+        .order
+        .iter()
+        .zip(&tour.options)
+        .map(|(&n, &o)| legs_of[n][o])
+        .collect();
+    let exit = legs.last().map_or(entry, |l| *l.points(tasks).last().unwrap_or(&entry));
+    RegionRoute {
+        legs,
+        entry,
+        exit,
+        cost: tour.cost,
+    }
+}
+
+/// Candidate entries: the task endpoints extreme along the four diagonals of the frame at `angle` (the lane
+/// set's corners).
+pub fn corner_entries(tasks: &[Task], angle: f64) -> Vec<Point2> {
+    let d = direction(angle);
+    let n = Vector2::new(-d.y, d.x);
+    let ends: Vec<Point2> = tasks
+        .iter()
+        .flat_map(|t| [t.points[0], t.points[t.points.len() - 1]])
+        .collect();
+    let mut out: Vec<Point2> = Vec::new();
+    for (su, sv) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
+        let key = |p: &Point2| su * p.coords.dot(&d) + sv * p.coords.dot(&n);
+        if let Some(best) = ends.iter().min_by(|a, b| key(a).total_cmp(&key(b)))
+            && !out.iter().any(|q| (q - best).norm() < 1e-9)
+        {
+            out.push(*best);
+        }
+    }
+    out
+}
+
+/// All routes of a region worth offering to the visiting-order problem: one per corner entry, and each
+/// driven backwards.
+pub fn region_options(
+    tasks: &[Task],
+    angle: f64,
+    seed: u64,
+    iterations: u64,
+    stop: Option<&dyn Fn() -> bool>,
+) -> Vec<RegionRoute> {
+    let mut out: Vec<RegionRoute> = Vec::new();
+    for e in corner_entries(tasks, angle) {
+        let r = route_from(tasks, angle, e, seed, iterations, stop);
+        let back = r.reversed();
+        out.push(r);
+        out.push(back);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pattern::TaskKind;
+
+    fn lane(y: f64) -> Task {
+        Task {
+            points: vec![Point2::new(0.0, y), Point2::new(5.0, y)],
+            kind: TaskKind::Lane,
+        }
+    }
+
+    #[test]
+    fn lanes_are_driven_as_a_zigzag() {
+        let tasks: Vec<Task> = (0..6).map(|k| lane(k as f64 * 0.3)).collect();
+        let r = route_from(&tasks, 0.0, Point2::new(0.0, 0.0), 1, 10_000, None);
+        assert_eq!(r.legs.len(), 6);
+        let mut seen: Vec<usize> = r.legs.iter().map(|l| l.task).collect();
+        seen.sort_unstable();
+        assert_eq!(seen, (0..6).collect::<Vec<_>>());
+        // 6 lanes of 5 m and 5 steps of 0.3 m.
+        assert!((r.cost - (30.0 + 1.5)).abs() < 1e-9, "cost {}", r.cost);
+        let back = r.reversed();
+        assert_eq!(back.entry, r.exit);
+        assert_eq!(back.legs[0].points(&tasks)[0], r.exit);
+    }
+
+    #[test]
+    fn closed_loops_return_to_their_start() {
+        let ring = Task {
+            points: vec![
+                Point2::new(0.0, 0.0),
+                Point2::new(1.0, 0.0),
+                Point2::new(1.0, 1.0),
+                Point2::new(0.0, 1.0),
+                Point2::new(0.0, 0.0),
+            ],
+            kind: TaskKind::Ring,
+        };
+        let leg = Leg {
+            task: 0,
+            reversed: true,
+            start_vertex: 2,
+        };
+        let pts = leg.points(std::slice::from_ref(&ring));
+        assert_eq!(pts.first(), pts.last());
+        assert_eq!(pts[0], Point2::new(1.0, 1.0));
+        assert_eq!(pts.len(), 5);
+    }
+}
