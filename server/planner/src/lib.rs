@@ -10,6 +10,7 @@
 
 pub mod error;
 pub mod geom;
+pub mod link;
 pub mod map;
 pub mod space;
 
