@@ -111,9 +111,7 @@ fn benches(c: &mut Criterion) {
             ..LinkParams::default()
         };
         let mut linker = Linker::new(&space, &params);
-        let grid = linker
-            .grid_path(a, b)
-            .expect("corner to corner is connected");
+        let grid = linker.grid_path(a, b).expect("corner to corner is connected");
         let path = linker.link(a, b).expect("path");
         let ms = median_ms(5, || {
             black_box(linker.link(a, b));
@@ -149,17 +147,13 @@ fn benches(c: &mut Criterion) {
         .measurement_time(Duration::from_secs(8));
     let params = LinkParams::default();
     let mut linker = Linker::new(&space, &params);
-    group.bench_function("long_link_astar", |bch| {
-        bch.iter(|| black_box(linker.link(a, b)))
-    });
+    group.bench_function("long_link_astar", |bch| bch.iter(|| black_box(linker.link(a, b))));
     let bidir = LinkParams {
         method: LinkMethod::Bidirectional,
         ..params
     };
     let mut linker_b = Linker::new(&space, &bidir);
-    group.bench_function("long_link_bidir", |bch| {
-        bch.iter(|| black_box(linker_b.link(a, b)))
-    });
+    group.bench_function("long_link_bidir", |bch| bch.iter(|| black_box(linker_b.link(a, b))));
     group.bench_function("geodesic_matrix_500", |bch| {
         bch.iter(|| black_box(geodesic_matrix(&space, &p500)))
     });

@@ -142,12 +142,18 @@ impl CoverageSpace {
     }
 
     /// True when the robot centre may stand at `p`: on the reachable set with at least `radius` clearance.
+    /// A point on a cell edge or corner (a diagonal step's midpoint) belongs to every cell that touches it.
     #[inline]
     pub fn point_ok(&self, p: Point2) -> bool {
-        match self.geometry().locate(p) {
-            Some(c) => self.reachable[self.geometry().index(c)] && self.clearance_at(p) >= self.robot.radius_m - 1e-9,
-            None => false,
+        if self.clearance_at(p) < self.robot.radius_m - 1e-9 {
+            return false;
         }
+        let g = self.geometry();
+        let e = g.resolution * 1e-6;
+        [(0.0, 0.0), (e, e), (-e, e), (e, -e), (-e, -e)]
+            .iter()
+            .filter_map(|&(dx, dy)| g.locate(Point2::new(p.x + dx, p.y + dy)))
+            .any(|c| self.reachable[g.index(c)])
     }
 
     /// True when every point of segment `a`–`b` keeps `radius` clearance on the reachable set, checked every

@@ -15,16 +15,7 @@ use crate::geom::Point2;
 use crate::space::CoverageSpace;
 
 /// Cell offsets of the 8 moves: E, N, W, S, NE, NW, SW, SE. `d ^ 2` is the opposite of `d`.
-pub(crate) const DIRS: [(isize, isize); 8] = [
-    (1, 0),
-    (0, 1),
-    (-1, 0),
-    (0, -1),
-    (1, 1),
-    (-1, 1),
-    (-1, -1),
-    (1, -1),
-];
+pub(crate) const DIRS: [(isize, isize); 8] = [(1, 0), (0, 1), (-1, 0), (0, -1), (1, 1), (-1, 1), (-1, -1), (1, -1)];
 
 /// Step length of each move in cells.
 pub(crate) const STEP_CELLS: [f64; 8] = [
@@ -130,10 +121,7 @@ impl<'s> Graph<'s> {
     /// Octile distance between two cells, metres.
     #[inline]
     pub(crate) fn octile(&self, i: usize, j: usize) -> f64 {
-        self.octile_xy(
-            (i % self.width, i / self.width),
-            (j % self.width, j / self.width),
-        )
+        self.octile_xy((i % self.width, i / self.width), (j % self.width, j / self.width))
     }
 
     /// Octile distance between cells given by coordinates, metres.
@@ -175,10 +163,7 @@ impl PartialOrd for Entry {
 
 impl Ord for Entry {
     fn cmp(&self, other: &Self) -> Ordering {
-        other
-            .key
-            .total_cmp(&self.key)
-            .then_with(|| other.cell.cmp(&self.cell))
+        other.key.total_cmp(&self.key).then_with(|| other.cell.cmp(&self.cell))
     }
 }
 

@@ -228,11 +228,7 @@ fn line_walk(graph: &Graph<'_>, x: usize, y: usize) -> Option<f64> {
     } else {
         (ady, adx, false)
     };
-    let straight = if x_major {
-        dir_of(sx, 0)
-    } else {
-        dir_of(0, sy)
-    };
+    let straight = if x_major { dir_of(sx, 0) } else { dir_of(0, sy) };
     let diagonal = dir_of(sx, sy);
     let (mut cx, mut cy, mut i) = (x0, y0, x);
     let (major_i, minor_i) = (major as i64, minor as i64);
@@ -397,8 +393,23 @@ pub fn geodesic_matrix(space: &CoverageSpace, points: &[Point2]) -> Vec<f64> {
     let home: Vec<Option<usize>> = points
         .iter()
         .map(|&p| {
-            let i = geometry.index(geometry.locate(p)?);
-            space.reachable[i].then_some(i)
+            // The point's own cell, or — for a point on a cell edge or corner, which the floor puts in an
+            // unreachable cell beside it — the nearest reachable cell around it.
+            let c = geometry.locate(p)?;
+            let i = geometry.index(c);
+            if space.reachable[i] {
+                return Some(i);
+            }
+            [(1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (-1, 1), (1, -1), (-1, -1)]
+                .into_iter()
+                .filter_map(|(dx, dy)| geometry.offset(c, dx, dy))
+                .map(|n| geometry.index(n))
+                .filter(|&j| space.reachable[j] && space.segment_ok(p, geometry.center_of(j)))
+                .min_by(|&a, &b| {
+                    (geometry.center_of(a) - p)
+                        .norm()
+                        .total_cmp(&(geometry.center_of(b) - p).norm())
+                })
         })
         .collect();
     let seeds: Vec<(usize, f64, u32)> = home
@@ -517,10 +528,7 @@ pub fn geodesic_matrix(space: &CoverageSpace, points: &[Point2]) -> Vec<f64> {
         let src_label = src as u32;
         for &(_, p) in &of_site[src] {
             let pp = &portals[p as usize];
-            queue.relax(
-                p,
-                cells[pp.cells[side(pp, src_label)] as usize].dist + 0.5 * pp.step_m,
-            );
+            queue.relax(p, cells[pp.cells[side(pp, src_label)] as usize].dist + 0.5 * pp.step_m);
         }
         while let Some((u, du)) = queue.pop() {
             let u = u as usize;
@@ -618,20 +626,12 @@ mod tests {
             tool_width_m: 0.3,
         };
         let s = CoverageSpace::new(grid, robot, Point2::new(1.0, 1.0)).expect("space");
-        let pts = [
-            Point2::new(2.55, 0.55),
-            Point2::new(3.45, 0.55),
-            Point2::new(-5.0, 0.0),
-        ];
+        let pts = [Point2::new(2.55, 0.55), Point2::new(3.45, 0.55), Point2::new(-5.0, 0.0)];
         let m = geodesic_matrix(&s, &pts);
         let exact = geodesic_distance(&s, pts[0], pts[1]).expect("connected");
         // Around the wall: up ~1.6 m, over, down again.
         assert!(exact > 3.0, "{exact}");
-        assert!(
-            m[1] >= exact - 1e-9 && m[1] <= exact * 1.02,
-            "{} vs {exact}",
-            m[1]
-        );
+        assert!(m[1] >= exact - 1e-9 && m[1] <= exact * 1.02, "{} vs {exact}", m[1]);
         assert_eq!(m[1], m[3]);
         assert_eq!(m[2], f64::INFINITY);
         assert_eq!(m[8], 0.0);
@@ -675,12 +675,7 @@ mod tests {
     }
 
     /// Relative excess of the matrix over the exact per-pair distance on seeded cluttered maps.
-    fn excess_stats(
-        size: usize,
-        obstacles: usize,
-        npts: usize,
-        seeds: std::ops::Range<u64>,
-    ) -> (f64, f64, usize) {
+    fn excess_stats(size: usize, obstacles: usize, npts: usize, seeds: std::ops::Range<u64>) -> (f64, f64, usize) {
         let mut all = Vec::new();
         for seed in seeds {
             let Some(s) = random_space(seed, size, size, obstacles, 0.15) else {

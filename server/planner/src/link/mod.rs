@@ -137,9 +137,7 @@ impl LinkParams {
             if !v.is_finite() || !in_range {
                 return Err(PlannerError::InvalidParam {
                     name,
-                    reason: format!(
-                        "got {v}; alpha must be >= 0 m, epsilon_m > 0 m, preferred_clearance_m >= 0 m"
-                    ),
+                    reason: format!("got {v}; alpha must be >= 0 m, epsilon_m > 0 m, preferred_clearance_m >= 0 m"),
                 });
             }
         }
@@ -257,9 +255,7 @@ impl<'s> Linker<'s> {
         }
         let found = match self.params.method {
             LinkMethod::AStar => astar::search(&search, &mut self.fwd, &sources, &targets),
-            LinkMethod::Bidirectional => {
-                bidir::search(&search, &mut self.fwd, &mut self.bwd, &sources, &targets)
-            }
+            LinkMethod::Bidirectional => bidir::search(&search, &mut self.fwd, &mut self.bwd, &sources, &targets),
         }?;
         let geometry = space.geometry();
         let mut points = Vec::with_capacity(found.cells.len() + 2);
@@ -279,12 +275,7 @@ impl<'s> Linker<'s> {
 /// `a` and `b` exactly; `None` when `b` is not reachable from `a` (or either is not a valid robot position,
 /// see [`CoverageSpace::point_ok`]). Every segment satisfies `space.segment_ok`. For many links on one space
 /// use a [`Linker`], which reuses its buffers.
-pub fn link(
-    space: &CoverageSpace,
-    a: Point2,
-    b: Point2,
-    params: &LinkParams,
-) -> Option<Vec<Point2>> {
+pub fn link(space: &CoverageSpace, a: Point2, b: Point2, params: &LinkParams) -> Option<Vec<Point2>> {
     Linker::new(space, params).link(a, b)
 }
 
@@ -322,13 +313,7 @@ pub(crate) mod testutil {
 
     /// A `w × h` map at 0.1 m with `obstacles` random rectangles and disks (half-sizes 0.05–1.2 m); `None`
     /// when the robot fits nowhere.
-    pub fn random_space(
-        seed: u64,
-        w: usize,
-        h: usize,
-        obstacles: usize,
-        radius_m: f64,
-    ) -> Option<CoverageSpace> {
+    pub fn random_space(seed: u64, w: usize, h: usize, obstacles: usize, radius_m: f64) -> Option<CoverageSpace> {
         let mut rng = Rng::new(seed);
         let g = GridGeometry::new(w, h, 0.1, Point2::new(-1.0, 2.0)).ok()?;
         let mut grid = OccupancyGrid::filled(g, CellState::Free);
@@ -387,10 +372,7 @@ pub(crate) mod testutil {
             .map(|_| {
                 for _ in 0..1000 {
                     let c = g.center_of(cells[rng.below(cells.len())]);
-                    let p = c + crate::geom::Vector2::new(
-                        rng.range(-0.05, 0.05),
-                        rng.range(-0.05, 0.05),
-                    );
+                    let p = c + crate::geom::Vector2::new(rng.range(-0.05, 0.05), rng.range(-0.05, 0.05));
                     if space.point_ok(p) {
                         return p;
                     }
@@ -425,12 +407,7 @@ mod tests {
         assert_eq!(path[0], a);
         assert_eq!(path[path.len() - 1], b);
         for w in path.windows(2) {
-            assert!(
-                space.segment_ok(w[0], w[1]),
-                "segment {:?} -> {:?} not ok",
-                w[0],
-                w[1]
-            );
+            assert!(space.segment_ok(w[0], w[1]), "segment {:?} -> {:?} not ok", w[0], w[1]);
         }
     }
 
@@ -482,16 +459,9 @@ mod tests {
             };
             let path = link(&s, a, b, &params).expect("reachable through the door");
             assert_valid(&s, &path, a, b);
-            assert!(
-                path.len() <= 5,
-                "{method}: {} vertices: {path:?}",
-                path.len()
-            );
+            assert!(path.len() <= 5, "{method}: {} vertices: {path:?}", path.len());
             // It passes above the wall's end (centre of its top cell row at y = 1.95 m).
-            assert!(
-                path.iter().any(|p| p.y > 1.95 && (p.x - 3.0).abs() < 0.6),
-                "{path:?}"
-            );
+            assert!(path.iter().any(|p| p.y > 1.95 && (p.x - 3.0).abs() < 0.6), "{path:?}");
             // Keeps min(radius + preferred, the grid path's clearance), and the radius everywhere.
             let grid = Linker::new(&s, &params).grid_path(a, b).expect("grid path");
             let kept = path_min_clearance(&s, &path);
@@ -553,10 +523,7 @@ mod tests {
         let gp = Linker::new(&s, &plain).grid_path(a, b).expect("path");
         let gf = Linker::new(&s, &field).grid_path(a, b).expect("path");
         assert!(path_min_clearance(&s, &gf.points) > path_min_clearance(&s, &gp.points) + 0.1);
-        assert!(
-            crate::geom::polyline_length(&gf.points)
-                >= crate::geom::polyline_length(&gp.points) - 1e-9
-        );
+        assert!(crate::geom::polyline_length(&gf.points) >= crate::geom::polyline_length(&gp.points) - 1e-9);
     }
 
     #[test]

@@ -49,9 +49,7 @@ pub(crate) fn segment_keeps(space: &CoverageSpace, a: Point2, b: Point2, need: f
     samples(space, a, b).all(|p| {
         let Some(c) = g.locate(p) else { return false };
         let i = g.index(c);
-        space.reachable[i]
-            && (clearance_lower_bound(space, i, p) >= threshold
-                || space.clearance_at(p) >= threshold)
+        space.reachable[i] && (clearance_lower_bound(space, i, p) >= threshold || space.clearance_at(p) >= threshold)
     })
 }
 
@@ -178,9 +176,7 @@ mod tests {
         let out = shortcut(&s, &path, 0.5);
         assert_eq!(out[0], path[0]);
         assert_eq!(out[out.len() - 1], path[4]);
-        assert!(
-            path_min_clearance(&s, &out) >= (0.65f64).min(path_min_clearance(&s, &path)) - 1e-9
-        );
+        assert!(path_min_clearance(&s, &out) >= (0.65f64).min(path_min_clearance(&s, &path)) - 1e-9);
         // The middle vertex can go (the straight 1 m-away segment keeps 0.65 m).
         assert!(out.len() < path.len(), "{out:?}");
     }

@@ -181,7 +181,11 @@ pub fn lanes_at(
     // iso-clearance line (≈ res² / 8r, doubled): then lanes along a wall, and the step from one lane end to
     // the next along a wall across them, keep the clearance too.
     let margin = res * res / (4.0 * space.robot.radius_m);
-    let (vlo, vhi) = if vmax - vmin > 2.0 * margin { (vmin + margin, vmax - margin) } else { (vmin, vmax) };
+    let (vlo, vhi) = if vmax - vmin > 2.0 * margin {
+        (vmin + margin, vmax - margin)
+    } else {
+        (vmin, vmax)
+    };
     // A side where cover targets lie beyond the region's own cells is a wall side: the outermost lane moves
     // onto the outermost cells there. Elsewhere the region owns the lattice lanes in its half-open offset
     // range [vmin - res/2, vmax + res/2), exactly tiling it with its neighbours.
@@ -350,8 +354,12 @@ mod tests {
 
     fn whole(space: &CoverageSpace) -> (Vec<u32>, Vec<u32>, Vec<usize>, Vec<usize>) {
         let g = space.geometry();
-        let labels: Vec<u32> = (0..g.len()).map(|i| if space.reachable[i] { 0 } else { u32::MAX }).collect();
-        let target_labels: Vec<u32> = (0..g.len()).map(|i| if space.coverable[i] { 0 } else { u32::MAX }).collect();
+        let labels: Vec<u32> = (0..g.len())
+            .map(|i| if space.reachable[i] { 0 } else { u32::MAX })
+            .collect();
+        let target_labels: Vec<u32> = (0..g.len())
+            .map(|i| if space.coverable[i] { 0 } else { u32::MAX })
+            .collect();
         let cells: Vec<usize> = (0..g.len()).filter(|&i| space.reachable[i]).collect();
         let targets: Vec<usize> = (0..g.len()).filter(|&i| space.coverable[i]).collect();
         (labels, target_labels, cells, targets)
