@@ -310,3 +310,29 @@ mod tests {
         assert_eq!(m.warnings.len(), 1);
     }
 }
+
+#[cfg(test)]
+mod fuzz {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// Whatever the YAML text and image bytes, loading returns a map or an error, never a panic.
+        #[test]
+        fn malformed_maps_never_panic(yaml in ".{0,200}", bytes in proptest::collection::vec(any::<u8>(), 0..300),
+                                       w in 0usize..5, h in 0usize..5, res in prop_oneof![Just(0.05), Just(0.0), Just(-1.0), Just(f64::NAN)]) {
+            let _ = load_ros_map(&yaml, |_| Ok(bytes.clone()));
+            let text = format!("image: m.pgm\nresolution: {res}\norigin: [0, 0, 0]\n");
+            let mut img = format!("P5\n{w} {h}\n255\n").into_bytes();
+            img.extend_from_slice(&bytes);
+            let _ = load_ros_map(&text, |_| Ok(img.clone()));
+        }
+
+        #[test]
+        fn malformed_json_grids_never_panic(text in ".{0,200}", w in 0usize..4, h in 0usize..4, cells in proptest::collection::vec(-3i16..120, 0..20)) {
+            let _ = crate::map::JsonGrid::parse(&text).and_then(crate::map::JsonGrid::into_grid);
+            let doc = serde_json::json!({"resolution": 0.1, "origin": [0.0, 0.0], "width": w, "height": h, "cells": cells});
+            let _ = crate::map::JsonGrid::parse(&doc.to_string()).and_then(crate::map::JsonGrid::into_grid);
+        }
+    }
+}

@@ -508,3 +508,47 @@ fn summary(space: &CoverageSpace, regions: &Regions, id: usize, angle: f64) -> R
         area_m2,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::decompose::tests::random_space;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(12))]
+        /// Lanes, passes and links never leave traversable space; plans start and end at the dock, cover what
+        /// they can reach, and are reproducible.
+        #[test]
+        fn plans_on_random_rooms_are_collision_free(seed in any::<u64>(), obstacles in 0usize..10, d in 0usize..4) {
+            let Some(space) = random_space(seed, 50, 40, obstacles) else { return Ok(()) };
+            let params = PlanParams { decomposition: DecompositionMethod::ALL[d], seed, ..PlanParams::default() };
+            let out = plan(&space, &params, &mut NoMonitor).expect("plan");
+            let pts = out.points();
+            prop_assert_eq!(pts.first(), Some(&space.start));
+            prop_assert_eq!(pts.last(), Some(&space.start));
+            for w in pts.windows(2) {
+                prop_assert!(space.segment_ok(w[0], w[1]), "segment {:?} leaves traversable space", w);
+            }
+            prop_assert_eq!(out.metrics.collisions, 0);
+            prop_assert!(out.metrics.coverage_pct >= 99.0, "{:?}", out.metrics);
+            let again = plan(&space, &params, &mut NoMonitor).expect("plan");
+            prop_assert_eq!(again.points(), pts);
+        }
+    }
+
+    #[test]
+    fn cancellation_stops_the_plan() {
+        struct Cancel;
+        impl PlanMonitor for Cancel {
+            fn cancelled(&self) -> bool {
+                true
+            }
+        }
+        let space = random_space(3, 40, 30, 3).expect("space");
+        assert_eq!(
+            plan(&space, &PlanParams::default(), &mut Cancel).err(),
+            Some(PlannerError::Cancelled)
+        );
+    }
+}
