@@ -1,0 +1,133 @@
+//! Insertion: a whole batch walks down the tree at once (partitioned in place at every node), and the
+//! voxel down-sampling rule decides beforehand which points of the batch enter.
+
+use super::aabb::Point3;
+use super::delete::Region;
+use super::node::{F_BG_ROOT, LEAF_CAP, NIL};
+use super::rebuild::LogOp;
+use super::{IkdTree, VoxelKey, voxel_centre_dist2, voxel_key, voxel_search_box};
+
+/// Moves the points that go left to the front of `pts` and returns how many there are. A point goes left
+/// when it is below `split` on `axis`, or equal to it and `ties_left`.
+fn partition(pts: &mut [Point3], axis: usize, split: f32, ties_left: bool) -> usize {
+    let (mut i, mut j) = (0, pts.len());
+    while i < j {
+        let c = pts[i].get(axis);
+        if c < split || (ties_left && c == split) {
+            i += 1;
+        } else {
+            j -= 1;
+            pts.swap(i, j);
+        }
+    }
+    i
+}
+
+impl IkdTree {
+    /// Adds the finite points of `points` (others are skipped) and returns how many of them are valid in
+    /// the tree when the call returns.
+    ///
+    /// Without `downsample` every finite point is stored, duplicates included. With `downsample`, the
+    /// voxel rule of the [module documentation](self) applies: a point enters only when it is strictly
+    /// nearer its voxel's centre than every valid point already in that voxel, and replaces them; of several
+    /// points of the call in one voxel, the nearest to the centre (the first among equals) is the candidate.
+    ///
+    /// Amortised O(m log n) for m points, plus O(m log m) for grouping voxels when down-sampling. May
+    /// rebuild the subtrees that the new points unbalance, or start a background rebuild.
+    pub fn add_points(&mut self, points: &[Point3], downsample: bool) -> usize {
+        self.poll_background(false);
+        let pts: Vec<Point3> = points.iter().filter(|p| p.is_finite()).copied().collect();
+        let mut pts = if downsample { self.downsample_select(&pts) } else { pts };
+        let n = pts.len();
+        self.insert_points(&mut pts);
+        self.finish_write();
+        n
+    }
+
+    /// Applies the voxel rule to `pts` against the current tree: deletes the valid points of every voxel
+    /// that a new point wins and returns the winners (at most one per voxel).
+    fn downsample_select(&mut self, pts: &[Point3]) -> Vec<Point3> {
+        let vs = self.params.voxel_size;
+        let mut items: Vec<(VoxelKey, f32, u32)> = pts
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let k = voxel_key(p, vs);
+                (k, voxel_centre_dist2(p, &k, vs), i as u32)
+            })
+            .collect();
+        items.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)).then(a.2.cmp(&b.2)));
+        let mut winners = Vec::with_capacity(items.len());
+        let mut i = 0;
+        while i < items.len() {
+            let (key, d2, idx) = items[i];
+            let mut j = i + 1;
+            while j < items.len() && items[j].0 == key {
+                j += 1;
+            }
+            i = j;
+            let p = pts[idx as usize];
+            let existing = self.voxel_best(&p);
+            if d2 < existing {
+                if existing.is_finite() {
+                    self.delete_region(&Region::Voxel { key, vs, search: voxel_search_box(&key, vs) });
+                }
+                winners.push(p);
+            }
+        }
+        winners
+    }
+
+    /// Inserts every point of `pts` (finite, no down-sampling), then rebuilds what the criteria ask for.
+    pub(crate) fn insert_points(&mut self, pts: &mut [Point3]) {
+        if pts.is_empty() {
+            return;
+        }
+        if self.root == NIL {
+            self.root = self.arena.build(pts);
+            return;
+        }
+        let mut path = Vec::with_capacity(64);
+        if self.insert_rec(self.root, pts, &mut path, false) {
+            self.rebuild(self.root, &[]);
+        }
+    }
+
+    fn insert_rec(&mut self, id: u32, pts: &mut [Point3], path: &mut Vec<u32>, inside_bg: bool) -> bool {
+        if pts.is_empty() {
+            return false;
+        }
+        let n = self.arena.nodes[id as usize];
+        let inside = inside_bg || n.flags & F_BG_ROOT != 0;
+        if n.flags & F_BG_ROOT != 0 {
+            self.log(LogOp::Insert(pts.to_vec()));
+        }
+        if n.is_leaf() {
+            let size = n.size as usize;
+            if size + pts.len() <= LEAF_CAP {
+                let node = &mut self.arena.nodes[id as usize];
+                let leaf = &mut self.arena.leaves[n.a as usize];
+                for (slot, p) in leaf.pts[size..size + pts.len()].iter_mut().zip(pts.iter()) {
+                    *slot = *p;
+                    node.bbox.expand(p);
+                }
+                node.size += pts.len() as u32;
+                return !inside && self.violates(id);
+            }
+            // The bucket overflows: it becomes a balanced subtree of its valid points and the new ones.
+            self.rebuild_with(id, pts);
+            return false;
+        }
+        self.arena.push_down(id);
+        let (a, b) = (n.a, n.b);
+        let ties_left = self.arena.nodes[a as usize].size <= self.arena.nodes[b as usize].size;
+        let mid = partition(pts, n.axis as usize, n.split, ties_left);
+        let (lo, hi) = pts.split_at_mut(mid);
+        path.push(id);
+        let va = self.insert_rec(a, lo, path, inside);
+        let vb = self.insert_rec(b, hi, path, inside);
+        path.pop();
+        self.arena.pull_up(id);
+        self.resolve(id, va, vb, path, inside)
+    }
+}
