@@ -38,8 +38,8 @@
 //!   queries. Writes that reach that subtree meanwhile are applied to it and appended to an operation
 //!   log; when the thread is done, the next write (or [`IkdTree::wait_rebuild`]) replays the log onto the
 //!   new subtree and swaps it in. Only one background rebuild runs at a time; others run in place.
-//! - **Memory.** Slots released by rebuilds go to free lists; once more than half of the arena is free,
-//!   the tree is compacted (O(n)), so deleting most of the map gives its memory back.
+//! - **Memory.** Slots released by rebuilds go to free lists; once a third of the arena is free, the tree
+//!   is compacted (O(n), amortised over the frees), so deleting most of the map gives its memory back.
 //!
 //! # Thread model
 //!
@@ -254,7 +254,10 @@ impl IkdTree {
     /// Blocks until the background rebuild in flight, if any, has finished, then replays its log and swaps
     /// it in. Queries are exact with or without this; it only settles memory and shape (tests, shutdown).
     pub fn wait_rebuild(&mut self) {
-        self.poll_background(true);
+        // Swapping one in may start another (an ancestor found dirty or unbalanced): settle them all.
+        while self.bg.is_some() {
+            self.poll_background(true);
+        }
         self.finish_write();
     }
 

@@ -66,8 +66,9 @@ impl IkdTree {
         if n.is_leaf() || n.size < BALANCE_MIN {
             return false;
         }
+        // One point of slack: a fresh build splits an odd count one-off, which must pass even at 0.5.
         let big = self.arena.nodes[n.a as usize].size.max(self.arena.nodes[n.b as usize].size);
-        big as f32 > self.params.alpha_bal * size
+        big as f32 > self.params.alpha_bal * size + 1.0
     }
 
     /// Called on internal node `id` after a write below it, with whether each child violates a criterion.
@@ -204,16 +205,16 @@ impl IkdTree {
         }
     }
 
-    /// End of every public write: swap in a finished background rebuild, and compact the arena once more
-    /// than half of it is free.
+    /// End of every public write: swap in a finished background rebuild, and compact the arena once a third
+    /// of it is free (free slots exceed half the used ones). Amortised O(1) per freed slot.
     pub(crate) fn finish_write(&mut self) {
         self.poll_background(false);
         if self.bg.is_some() || self.root == NIL {
             return;
         }
         let a = &self.arena;
-        let nodes_wasted = a.free_nodes.len() > a.used_nodes().max(1024);
-        let leaves_wasted = a.free_leaves.len() > a.used_leaves().max(256);
+        let nodes_wasted = a.free_nodes.len() > (a.used_nodes() / 2).max(1024);
+        let leaves_wasted = a.free_leaves.len() > (a.used_leaves() / 2).max(256);
         if nodes_wasted || leaves_wasted {
             let mut fresh = Arena::with_capacity(a.used_nodes(), a.used_leaves());
             self.root = fresh.import(&self.arena, self.root);
