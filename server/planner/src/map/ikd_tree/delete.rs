@@ -18,20 +18,21 @@ pub(crate) enum Region {
 
 impl Region {
     #[inline]
-    fn intersects(&self, b: &Aabb) -> bool {
-        match self {
-            Region::Box(r) => r.intersects(b),
-            Region::Voxel { search, .. } => search.intersects(b),
-            Region::Point(p) => b.contains(p),
-        }
-    }
-
-    #[inline]
-    fn matches(&self, p: &Point3) -> bool {
+    pub(crate) fn matches(&self, p: &Point3) -> bool {
         match self {
             Region::Box(r) => r.contains(p),
             Region::Voxel { key, vs, search } => search.contains(p) && voxel_key(p, *vs) == *key,
             Region::Point(q) => p == q,
+        }
+    }
+
+    /// A box holding every point the region can match.
+    #[inline]
+    fn search_box(&self) -> Aabb {
+        match self {
+            Region::Box(r) => *r,
+            Region::Voxel { search, .. } => *search,
+            Region::Point(p) => Aabb::new(*p, *p),
         }
     }
 
@@ -56,7 +57,7 @@ impl IkdTree {
             return 0;
         }
         self.poll_background(false);
-        let n = self.delete_region(&Region::Box(*b));
+        let n = self.delete_regions(&[Region::Box(*b)]);
         self.finish_write();
         n
     }
@@ -67,10 +68,8 @@ impl IkdTree {
     /// O(m log n) expected for m entries.
     pub fn delete_points(&mut self, points: &[Point3]) -> usize {
         self.poll_background(false);
-        let mut n = 0;
-        for p in points.iter().filter(|p| p.is_finite()) {
-            n += self.delete_region(&Region::Point(*p));
-        }
+        let regions: Vec<Region> = points.iter().filter(|p| p.is_finite()).map(|p| Region::Point(*p)).collect();
+        let n = self.delete_regions(&regions);
         self.finish_write();
         n
     }
@@ -91,29 +90,45 @@ impl IkdTree {
         n
     }
 
-    /// Deletes what `region` covers, rebuilding the root if it then violates a criterion.
-    pub(crate) fn delete_region(&mut self, region: &Region) -> usize {
-        if self.root == NIL {
+    /// Deletes what any of `regions` covers in one walk down the tree (each node is visited once, with the
+    /// regions that reach it), rebuilding the root if it then violates a criterion.
+    pub(crate) fn delete_regions(&mut self, regions: &[Region]) -> usize {
+        if self.root == NIL || regions.is_empty() {
             return 0;
         }
+        let mut scratch: Vec<(Aabb, u32)> =
+            regions.iter().enumerate().map(|(i, r)| (r.search_box(), i as u32)).collect();
         let mut path = Vec::with_capacity(64);
-        let (n, v) = self.delete_rec(self.root, region, &mut path, false);
+        let (n, v) = self.delete_multi_rec(self.root, 0, regions.len(), &mut scratch, regions, &mut path, false);
         if v {
             self.rebuild(self.root, &[]);
         }
         n
     }
 
-    fn delete_rec(&mut self, id: u32, region: &Region, path: &mut Vec<u32>, inside_bg: bool) -> (usize, bool) {
+    /// `scratch[lo..hi]` (the top of the stack) indexes the regions that reach node `id`.
+    #[allow(clippy::too_many_arguments)]
+    fn delete_multi_rec(
+        &mut self,
+        id: u32,
+        lo: usize,
+        hi: usize,
+        scratch: &mut Vec<(Aabb, u32)>,
+        regions: &[Region],
+        path: &mut Vec<u32>,
+        inside_bg: bool,
+    ) -> (usize, bool) {
         let n = self.arena.nodes[id as usize];
-        if n.invalid == n.size || !region.intersects(&n.bbox) {
+        if n.invalid == n.size {
             return (0, false);
         }
         let inside = inside_bg || n.flags & F_BG_ROOT != 0;
         if n.flags & F_BG_ROOT != 0 {
-            self.log(LogOp::Delete(*region));
+            for i in lo..hi {
+                self.log(LogOp::Delete(regions[scratch[i].1 as usize]));
+            }
         }
-        if n.flags & F_BG_ANC == 0 && region.swallows(&n.bbox) {
+        if n.flags & F_BG_ANC == 0 && scratch[lo..hi].iter().any(|r| regions[r.1 as usize].swallows(&n.bbox)) {
             let cnt = n.live() as usize;
             self.arena.label_all(id, true);
             return (cnt, !inside && self.violates(id));
@@ -121,10 +136,16 @@ impl IkdTree {
         if n.is_leaf() {
             let leaf = &mut self.arena.leaves[n.a as usize];
             let mut cnt = 0;
-            for i in 0..n.size as usize {
-                if leaf.dead & (1 << i) == 0 && region.matches(&leaf.pts[i]) {
-                    leaf.dead |= 1 << i;
-                    cnt += 1;
+            for &(sb, r) in &scratch[lo..hi] {
+                if !sb.intersects(&n.bbox) {
+                    continue;
+                }
+                let region = &regions[r as usize];
+                for i in 0..n.size as usize {
+                    if leaf.dead & (1 << i) == 0 && region.matches(&leaf.pts[i]) {
+                        leaf.dead |= 1 << i;
+                        cnt += 1;
+                    }
                 }
             }
             self.arena.nodes[id as usize].invalid += cnt as u32;
@@ -132,12 +153,30 @@ impl IkdTree {
         }
         self.arena.push_down(id);
         path.push(id);
-        let (ca, va) = self.delete_rec(n.a, region, path, inside);
-        let (cb, vb) = self.delete_rec(n.b, region, path, inside);
+        let mut total = 0;
+        let mut v = [false; 2];
+        // Route by the split plane: left points are <= split, right points >= split on `axis`.
+        let (axis, split) = (n.axis as usize, n.split);
+        for (ci, child) in [n.a, n.b].into_iter().enumerate() {
+            let start = scratch.len();
+            for i in lo..hi {
+                let it = scratch[i];
+                if (ci == 0 && it.0.min.get(axis) <= split) || (ci == 1 && it.0.max.get(axis) >= split) {
+                    scratch.push(it);
+                }
+            }
+            let end = scratch.len();
+            if end > start {
+                let (c, vv) = self.delete_multi_rec(child, start, end, scratch, regions, path, inside);
+                total += c;
+                v[ci] = vv;
+            }
+            scratch.truncate(start);
+        }
         path.pop();
         self.arena.pull_up(id);
-        let v = self.resolve(id, va, vb, path, inside);
-        (ca + cb, v)
+        let r = self.resolve(id, v[0], v[1], path, inside);
+        (total, r)
     }
 
     fn restore_rec(&mut self, id: u32, b: &Aabb) -> usize {

@@ -5,7 +5,79 @@ use super::aabb::Point3;
 use super::delete::Region;
 use super::node::{F_BG_ROOT, LEAF_CAP, NIL};
 use super::rebuild::LogOp;
+use super::search::VoxQuery;
 use super::{IkdTree, VoxelKey, voxel_centre_dist2, voxel_key, voxel_search_box};
+
+/// Offset that makes a voxel coordinate non-negative when packing three into a `u64` (21 bits each).
+const PACK_BIAS: i64 = 1 << 20;
+
+/// The voxel key packed into 63 bits, when every coordinate fits in 21 bits (voxel side × ±2^20: ±200 km
+/// at 0.2 m).
+#[inline]
+fn pack(k: &VoxelKey) -> Option<u64> {
+    let mut out = 0u64;
+    for &c in k {
+        let b = c.checked_add(PACK_BIAS)?;
+        if !(0..2 * PACK_BIAS).contains(&b) {
+            return None;
+        }
+        out = (out << 21) | b as u64;
+    }
+    Some(out)
+}
+
+/// One candidate per voxel touched by `pts`: (voxel, squared distance to its centre, index in `pts`) of
+/// the point nearest the centre, the first among equals. O(m) with a hash table (O(m log m) by sorting
+/// for keys too large to pack).
+fn group_by_voxel(pts: &[Point3], vs: f32) -> Vec<(VoxelKey, f32, u32)> {
+    let items: Vec<(VoxelKey, f32, u32)> = pts
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let k = voxel_key(p, vs);
+            (k, voxel_centre_dist2(p, &k, vs), i as u32)
+        })
+        .collect();
+    let packed: Option<Vec<u64>> = items.iter().map(|it| pack(&it.0)).collect();
+    let mut out = Vec::with_capacity(items.len());
+    if let Some(packed) = packed {
+        // Open addressing, linear probing; slot value = item index + 1 (0 = empty).
+        let bits = (2 * items.len()).max(16).next_power_of_two().trailing_zeros();
+        let mask = (1usize << bits) - 1;
+        let mut table = vec![(0u64, 0u32); 1 << bits];
+        for (i, &key) in packed.iter().enumerate() {
+            let mut h = (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> (64 - bits)) as usize;
+            loop {
+                let slot = &mut table[h];
+                if slot.1 == 0 {
+                    *slot = (key, i as u32 + 1);
+                    break;
+                }
+                if slot.0 == key {
+                    let cur = slot.1 as usize - 1;
+                    if items[i].1 < items[cur].1 {
+                        slot.1 = i as u32 + 1;
+                    }
+                    break;
+                }
+                h = (h + 1) & mask;
+            }
+        }
+        out.extend(table.iter().filter(|s| s.1 != 0).map(|s| items[s.1 as usize - 1]));
+    } else {
+        let mut items = items;
+        items.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)).then(a.2.cmp(&b.2)));
+        let mut i = 0;
+        while i < items.len() {
+            out.push(items[i]);
+            let key = items[i].0;
+            while i < items.len() && items[i].0 == key {
+                i += 1;
+            }
+        }
+    }
+    out
+}
 
 /// Moves the points that go left to the front of `pts` and returns how many there are. A point goes left
 /// when it is below `split` on `axis`, or equal to it and `ties_left`.
@@ -45,36 +117,28 @@ impl IkdTree {
     }
 
     /// Applies the voxel rule to `pts` against the current tree: deletes the valid points of every voxel
-    /// that a new point wins and returns the winners (at most one per voxel).
+    /// that a new point wins and returns the winners (at most one per voxel). Three walks: group the batch
+    /// by voxel, find every candidate voxel's best valid point in one pass down the tree, then delete the
+    /// won voxels in one more pass.
     fn downsample_select(&mut self, pts: &[Point3]) -> Vec<Point3> {
         let vs = self.params.voxel_size;
-        let mut items: Vec<(VoxelKey, f32, u32)> = pts
+        let cands = group_by_voxel(pts, vs);
+        let mut qs: Vec<VoxQuery> = cands
             .iter()
-            .enumerate()
-            .map(|(i, p)| {
-                let k = voxel_key(p, vs);
-                (k, voxel_centre_dist2(p, &k, vs), i as u32)
-            })
+            .map(|&(key, _, _)| VoxQuery { key, sb: voxel_search_box(&key, vs), best: f32::INFINITY })
             .collect();
-        items.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)).then(a.2.cmp(&b.2)));
-        let mut winners = Vec::with_capacity(items.len());
-        let mut i = 0;
-        while i < items.len() {
-            let (key, d2, idx) = items[i];
-            let mut j = i + 1;
-            while j < items.len() && items[j].0 == key {
-                j += 1;
-            }
-            i = j;
-            let p = pts[idx as usize];
-            let existing = self.voxel_best(&p);
-            if d2 < existing {
-                if existing.is_finite() {
-                    self.delete_region(&Region::Voxel { key, vs, search: voxel_search_box(&key, vs) });
+        self.voxel_best_multi(&mut qs);
+        let mut winners = Vec::with_capacity(cands.len());
+        let mut regions = Vec::new();
+        for (&(key, d2, idx), q) in cands.iter().zip(&qs) {
+            if d2 < q.best {
+                if q.best.is_finite() {
+                    regions.push(Region::Voxel { key, vs, search: q.sb });
                 }
-                winners.push(p);
+                winners.push(pts[idx as usize]);
             }
         }
+        self.delete_regions(&regions);
         winners
     }
 

@@ -164,7 +164,14 @@ pub(crate) type VoxelKey = [i64; 3];
 #[inline]
 pub(crate) fn voxel_key(p: &Point3, vs: f32) -> VoxelKey {
     let vs = vs as f64;
-    [(p.x as f64 / vs).floor() as i64, (p.y as f64 / vs).floor() as i64, (p.z as f64 / vs).floor() as i64]
+    [floor_i64(p.x as f64 / vs), floor_i64(p.y as f64 / vs), floor_i64(p.z as f64 / vs)]
+}
+
+/// `q.floor() as i64` without a libm call (baseline x86-64 has no rounding instruction); saturating.
+#[inline(always)]
+fn floor_i64(q: f64) -> i64 {
+    let t = q as i64;
+    if (t as f64) > q { t.saturating_sub(1) } else { t }
 }
 
 /// Squared distance from `p` to the centre of voxel `key`, square metres.

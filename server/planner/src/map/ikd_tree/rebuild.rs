@@ -174,14 +174,18 @@ impl IkdTree {
                 let params = IkdParams { background_rebuild_min: usize::MAX, ..self.params };
                 let mut sub = IkdTree { params, arena, root, bg: None, stats: Default::default() };
                 let n_ops = bg.log.len() as u64;
+                let mut deletes = Vec::new();
                 for op in bg.log {
                     match op {
-                        LogOp::Insert(mut v) => sub.insert_points(&mut v),
-                        LogOp::Delete(region) => {
-                            sub.delete_region(&region);
+                        LogOp::Insert(mut v) => {
+                            sub.delete_regions(&deletes);
+                            deletes.clear();
+                            sub.insert_points(&mut v);
                         }
+                        LogOp::Delete(region) => deletes.push(region),
                     }
                 }
+                sub.delete_regions(&deletes);
                 self.arena.free_below(bg.root);
                 let new = self.arena.import(&sub.arena, sub.root);
                 self.arena.nodes[bg.root as usize] = self.arena.nodes[new as usize];

@@ -6,7 +6,7 @@ use std::collections::BinaryHeap;
 
 use super::aabb::{Aabb, Point3};
 use super::node::{F_RESTORE_ALL, NIL};
-use super::{IkdTree, voxel_centre_dist2, voxel_key, voxel_search_box};
+use super::{IkdTree, voxel_centre_dist2, voxel_key};
 
 /// Up to `k` best candidates so far, sorted ascending by squared distance (small `k`), or a max-heap.
 enum Best {
@@ -139,15 +139,13 @@ impl IkdTree {
             return;
         }
         let forced = forced || n.flags & F_RESTORE_ALL != 0;
-        let (a, b) = (n.a, n.b);
-        let da = self.arena.nodes[a as usize].bbox.dist2(q);
-        let db = self.arena.nodes[b as usize].bbox.dist2(q);
-        let (first, df, second, ds) = if da <= db { (a, da, b, db) } else { (b, db, a, da) };
-        if df <= knn.bound {
-            self.knn_rec(first, q, forced, knn);
-            if ds <= knn.bound {
-                self.knn_rec(second, q, forced, knn);
-            }
+        // Near side first (by the split plane); the far side only if its box is within the bound. The
+        // plane test comes first because it needs no memory access.
+        let diff = q.get(n.axis as usize) - n.split;
+        let (near, far) = if diff < 0.0 { (n.a, n.b) } else { (n.b, n.a) };
+        self.knn_rec(near, q, forced, knn);
+        if diff * diff <= knn.bound && self.arena.nodes[far as usize].bbox.dist2(q) <= knn.bound {
+            self.knn_rec(far, q, forced, knn);
         }
     }
 
@@ -181,15 +179,11 @@ impl IkdTree {
             return;
         }
         let forced = forced || n.flags & F_RESTORE_ALL != 0;
-        let (a, b) = (n.a, n.b);
-        let da = self.arena.nodes[a as usize].bbox.dist2(q);
-        let db = self.arena.nodes[b as usize].bbox.dist2(q);
-        let (first, df, second, ds) = if da <= db { (a, da, b, db) } else { (b, db, a, da) };
-        if df < *best {
-            self.nn1_rec(first, q, forced, best);
-            if ds < *best {
-                self.nn1_rec(second, q, forced, best);
-            }
+        let diff = q.get(n.axis as usize) - n.split;
+        let (near, far) = if diff < 0.0 { (n.a, n.b) } else { (n.b, n.a) };
+        self.nn1_rec(near, q, forced, best);
+        if diff * diff < *best && self.arena.nodes[far as usize].bbox.dist2(q) < *best {
+            self.nn1_rec(far, q, forced, best);
         }
     }
 
@@ -263,40 +257,81 @@ impl IkdTree {
         self.box_rec(n.b, b, forced, out);
     }
 
-    /// Smallest squared distance (m²) from the centre of `p`'s voxel to a valid point in that voxel, or
-    /// +inf when the voxel holds none. Used by down-sampling.
-    pub(crate) fn voxel_best(&self, p: &Point3) -> f32 {
-        let vs = self.params.voxel_size;
-        let key = voxel_key(p, vs);
-        let sb = voxel_search_box(&key, vs);
-        let mut best = f32::INFINITY;
-        if self.root != NIL {
-            self.voxel_rec(self.root, &sb, &key, false, &mut best);
+    /// For every query, the smallest squared distance (m²) from its voxel's centre to a valid point of that
+    /// voxel (+inf when none), in one walk down the tree: each node is visited once, with the queries whose
+    /// search box may meet it (copied onto a stack, so the walk reads memory in order).
+    pub(crate) fn voxel_best_multi(&self, qs: &mut [VoxQuery]) {
+        if self.root == NIL || qs.is_empty() {
+            return;
         }
-        best
+        let mut scratch: Vec<(Aabb, u32)> = qs.iter().enumerate().map(|(i, q)| (q.sb, i as u32)).collect();
+        self.voxel_multi_rec(self.root, 0, qs.len(), &mut scratch, qs, false);
     }
 
-    fn voxel_rec(&self, id: u32, sb: &Aabb, key: &super::VoxelKey, forced: bool, best: &mut f32) {
+    fn voxel_multi_rec(
+        &self,
+        id: u32,
+        lo: usize,
+        hi: usize,
+        scratch: &mut Vec<(Aabb, u32)>,
+        qs: &mut [VoxQuery],
+        forced: bool,
+    ) {
         let n = &self.arena.nodes[id as usize];
-        if (!forced && n.invalid == n.size) || !n.bbox.intersects(sb) {
+        if !forced && n.invalid == n.size {
             return;
         }
         if n.is_leaf() {
             let vs = self.params.voxel_size;
             let leaf = &self.arena.leaves[n.a as usize];
             let dead = if forced { 0 } else { leaf.dead };
-            for (i, p) in leaf.pts[..n.size as usize].iter().enumerate() {
-                if dead & (1 << i) == 0 && sb.contains(p) && voxel_key(p, vs) == *key {
-                    let d2 = voxel_centre_dist2(p, key, vs);
-                    if d2 < *best {
-                        *best = d2;
+            for i in lo..hi {
+                let (sb, qi) = scratch[i];
+                if !sb.intersects(&n.bbox) {
+                    continue;
+                }
+                let q = &mut qs[qi as usize];
+                for (j, p) in leaf.pts[..n.size as usize].iter().enumerate() {
+                    if dead & (1 << j) == 0 && sb.contains(p) {
+                        let k = voxel_key(p, vs);
+                        if k == q.key {
+                            let d2 = voxel_centre_dist2(p, &k, vs);
+                            if d2 < q.best {
+                                q.best = d2;
+                            }
+                        }
                     }
                 }
             }
             return;
         }
         let forced = forced || n.flags & F_RESTORE_ALL != 0;
-        self.voxel_rec(n.a, sb, key, forced, best);
-        self.voxel_rec(n.b, sb, key, forced, best);
+        // Route by the split plane: left points are <= split, right points >= split on `axis`.
+        let (axis, split) = (n.axis as usize, n.split);
+        for (child, left) in [(n.a, true), (n.b, false)] {
+            let start = scratch.len();
+            for i in lo..hi {
+                let it = scratch[i];
+                if (left && it.0.min.get(axis) <= split) || (!left && it.0.max.get(axis) >= split) {
+                    scratch.push(it);
+                }
+            }
+            let end = scratch.len();
+            if end > start {
+                self.voxel_multi_rec(child, start, end, scratch, qs, forced);
+            }
+            scratch.truncate(start);
+        }
     }
+}
+
+/// One voxel's question for [`IkdTree::voxel_best_multi`].
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct VoxQuery {
+    /// The voxel.
+    pub key: super::VoxelKey,
+    /// A box holding the voxel (see `voxel_search_box`).
+    pub sb: Aabb,
+    /// Answer: best squared distance to the voxel centre among its valid points, +inf when none.
+    pub best: f32,
 }
