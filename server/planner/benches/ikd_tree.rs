@@ -20,7 +20,11 @@ const SIDE_M: f32 = 30.0;
 fn scene_point(rng: &mut ChaCha8Rng) -> Point3 {
     let noise = (rng.random::<f32>() - 0.5) * 0.02;
     if rng.random::<f32>() < 0.6 {
-        Point3::new(rng.random::<f32>() * SIDE_M, rng.random::<f32>() * SIDE_M, noise)
+        Point3::new(
+            rng.random::<f32>() * SIDE_M,
+            rng.random::<f32>() * SIDE_M,
+            noise,
+        )
     } else {
         let x = rng.random_range(0..4) as f32 * 10.0 + noise;
         Point3::new(x, rng.random::<f32>() * SIDE_M, rng.random::<f32>() * 3.0)
@@ -32,7 +36,11 @@ fn scan(rng: &mut ChaCha8Rng, cx: f32, cy: f32) -> Vec<Point3> {
     let mut out = Vec::with_capacity(10_000);
     while out.len() < 10_000 {
         let p = scene_point(rng);
-        let q = Point3::new(cx + (p.x - SIDE_M / 2.0) * 0.5, cy + (p.y - SIDE_M / 2.0) * 0.5, p.z);
+        let q = Point3::new(
+            cx + (p.x - SIDE_M / 2.0) * 0.5,
+            cy + (p.y - SIDE_M / 2.0) * 0.5,
+            p.z,
+        );
         out.push(q);
     }
     out
@@ -46,13 +54,18 @@ fn benches(c: &mut Criterion) {
     let mut rng = ChaCha8Rng::seed_from_u64(1);
     let map: Vec<Point3> = (0..N).map(|_| scene_point(&mut rng)).collect();
     let map_arr: Vec<[f32; 3]> = map.iter().map(arr).collect();
-    let scans: Vec<Vec<Point3>> = (0..8).map(|i| scan(&mut rng, 10.0 + i as f32, 15.0)).collect();
+    let scans: Vec<Vec<Point3>> = (0..8)
+        .map(|i| scan(&mut rng, 10.0 + i as f32, 15.0))
+        .collect();
     let queries: Vec<Point3> = (0..1000).map(|_| scene_point(&mut rng)).collect();
     let params = IkdParams::default();
     let mut base = IkdTree::new(params).expect("valid params");
     base.build(&map);
     let k5 = NonZeroUsize::MIN.saturating_add(4);
-    let slab = Aabb::new(Point3::new(-1.0, -1.0, -1.0), Point3::new(1.5, SIDE_M + 1.0, 4.0));
+    let slab = Aabb::new(
+        Point3::new(-1.0, -1.0, -1.0),
+        Point3::new(1.5, SIDE_M + 1.0, 4.0),
+    );
 
     let mut g = c.benchmark_group("ikd_tree");
     g.sample_size(10);
@@ -64,18 +77,18 @@ fn benches(c: &mut Criterion) {
         })
     });
     g.bench_function("kiddo_immutable_build_100k", |b| {
-        b.iter(|| ImmutableKdTree::<f32, 3>::new_from_slice(black_box(&map_arr)).expect("kiddo build"))
+        b.iter(|| {
+            ImmutableKdTree::<f32, 3>::new_from_slice(black_box(&map_arr)).expect("kiddo build")
+        })
     });
-    let mut i = 0;
-    g.bench_function("insert_scan_10k_downsampled", |b| {
+    g.bench_function("insert_scan_10k_downsampled_fresh_100k", |b| {
         b.iter_batched(
-            || (IkdTree::new(params).expect("valid params"), &scans[i % scans.len()]),
-            |(mut t, s)| {
-                // Build outside the timed part is not possible per batch; re-insert into a warm tree instead.
-                i += 1;
-                t.build(&[]);
-                black_box(t.add_points(s, true))
+            || {
+                let mut t = IkdTree::new(params).expect("valid params");
+                t.build(&map);
+                t
             },
+            |mut t| black_box(t.add_points(&scans[0], true)),
             BatchSize::LargeInput,
         )
     });
@@ -130,7 +143,11 @@ fn benches(c: &mut Criterion) {
     g.bench_function("kiddo_immutable_knn5_1k_queries", |b| {
         b.iter(|| {
             for q in &queries {
-                black_box(ki.query(&arr(q)).nearest_n::<SquaredEuclidean<f32>>(k5).execute());
+                black_box(
+                    ki.query(&arr(q))
+                        .nearest_n::<SquaredEuclidean<f32>>(k5)
+                        .execute(),
+                );
             }
         })
     });

@@ -61,18 +61,48 @@ struct Scene {
 impl Scene {
     fn new() -> Self {
         let mut walls = vec![
-            Wall { x0: 0.0, y0: 0.0, x1: SIDE_M, y1: 0.0 },
-            Wall { x0: SIDE_M, y0: 0.0, x1: SIDE_M, y1: SIDE_M },
-            Wall { x0: SIDE_M, y0: SIDE_M, x1: 0.0, y1: SIDE_M },
-            Wall { x0: 0.0, y0: SIDE_M, x1: 0.0, y1: 0.0 },
+            Wall {
+                x0: 0.0,
+                y0: 0.0,
+                x1: SIDE_M,
+                y1: 0.0,
+            },
+            Wall {
+                x0: SIDE_M,
+                y0: 0.0,
+                x1: SIDE_M,
+                y1: SIDE_M,
+            },
+            Wall {
+                x0: SIDE_M,
+                y0: SIDE_M,
+                x1: 0.0,
+                y1: SIDE_M,
+            },
+            Wall {
+                x0: 0.0,
+                y0: SIDE_M,
+                x1: 0.0,
+                y1: 0.0,
+            },
         ];
         // Rooms: every 10 m, walls of 8 m leaving 2 m doorways.
         for i in 1..10 {
             let c = i as f32 * 10.0;
             for j in 0..10 {
                 let s = j as f32 * 10.0 + 1.0;
-                walls.push(Wall { x0: c, y0: s, x1: c, y1: s + 8.0 });
-                walls.push(Wall { x0: s, y0: c, x1: s + 8.0, y1: c });
+                walls.push(Wall {
+                    x0: c,
+                    y0: s,
+                    x1: c,
+                    y1: s + 8.0,
+                });
+                walls.push(Wall {
+                    x0: s,
+                    y0: c,
+                    x1: s + 8.0,
+                    y1: c,
+                });
             }
         }
         let mut cum = Vec::with_capacity(walls.len());
@@ -92,17 +122,28 @@ impl Scene {
         let (dx, dy) = (w.x1 - w.x0, w.y1 - w.y0);
         let l = w.len().max(1e-6);
         let n = Self::noise(rng);
-        Point3::new(w.x0 + dx * t - dy / l * n, w.y0 + dy * t + dx / l * n, rng.random::<f32>() * HEIGHT_M)
+        Point3::new(
+            w.x0 + dx * t - dy / l * n,
+            w.y0 + dy * t + dx / l * n,
+            rng.random::<f32>() * HEIGHT_M,
+        )
     }
 
     /// A point anywhere on the site's surfaces: 60 % ground, 40 % walls (by length).
     fn point(&self, rng: &mut ChaCha8Rng) -> Point3 {
         if rng.random::<f32>() < 0.6 {
-            Point3::new(rng.random::<f32>() * SIDE_M, rng.random::<f32>() * SIDE_M, Self::noise(rng))
+            Point3::new(
+                rng.random::<f32>() * SIDE_M,
+                rng.random::<f32>() * SIDE_M,
+                Self::noise(rng),
+            )
         } else {
             let total = self.cum.last().copied().unwrap_or(1.0);
             let u = rng.random::<f32>() * total;
-            let i = self.cum.partition_point(|c| *c < u).min(self.walls.len() - 1);
+            let i = self
+                .cum
+                .partition_point(|c| *c < u)
+                .min(self.walls.len() - 1);
             let w = self.walls[i];
             let t = rng.random::<f32>();
             self.wall_point(rng, &w, t)
@@ -117,7 +158,10 @@ impl Scene {
             .walls
             .iter()
             .filter(|w| {
-                let (mx, my) = (sx.clamp(w.x0.min(w.x1), w.x0.max(w.x1)), sy.clamp(w.y0.min(w.y1), w.y0.max(w.y1)));
+                let (mx, my) = (
+                    sx.clamp(w.x0.min(w.x1), w.x0.max(w.x1)),
+                    sy.clamp(w.y0.min(w.y1), w.y0.max(w.y1)),
+                );
                 (mx - sx).powi(2) + (my - sy).powi(2) < r * r
             })
             .copied()
@@ -127,7 +171,11 @@ impl Scene {
             if near.is_empty() || rng.random::<f32>() < 0.7 {
                 let d = r * rng.random::<f32>();
                 let a = rng.random::<f32>() * std::f32::consts::TAU;
-                out.push(Point3::new(sx + d * a.cos(), sy + d * a.sin(), Self::noise(rng)));
+                out.push(Point3::new(
+                    sx + d * a.cos(),
+                    sy + d * a.sin(),
+                    Self::noise(rng),
+                ));
             } else {
                 let w = near[rng.random_range(0..near.len())];
                 let t = rng.random::<f32>();
@@ -145,14 +193,22 @@ impl Scene {
 fn thread_cpu_ns() -> u64 {
     std::fs::read_to_string("/proc/thread-self/schedstat")
         .ok()
-        .and_then(|s| s.split_whitespace().next().and_then(|v| v.parse::<u64>().ok()))
+        .and_then(|s| {
+            s.split_whitespace()
+                .next()
+                .and_then(|v| v.parse::<u64>().ok())
+        })
         .unwrap_or(0)
 }
 
 fn rss_bytes() -> usize {
     std::fs::read_to_string("/proc/self/statm")
         .ok()
-        .and_then(|s| s.split_whitespace().nth(1).and_then(|v| v.parse::<usize>().ok()))
+        .and_then(|s| {
+            s.split_whitespace()
+                .nth(1)
+                .and_then(|v| v.parse::<usize>().ok())
+        })
         .map_or(0, |pages| pages * 4096)
 }
 
@@ -170,7 +226,10 @@ fn round(x: f64, digits: i32) -> f64 {
 }
 
 fn main() {
-    let n: usize = std::env::args().nth(1).and_then(|a| a.parse().ok()).unwrap_or(1_000_000);
+    let n: usize = std::env::args()
+        .nth(1)
+        .and_then(|a| a.parse().ok())
+        .unwrap_or(1_000_000);
     let scene = Scene::new();
     let mut rng = ChaCha8Rng::seed_from_u64(2021);
     let map: Vec<Point3> = (0..n).map(|_| scene.point(&mut rng)).collect();
@@ -178,7 +237,12 @@ fn main() {
     let scans: Vec<Vec<Point3>> = (0..100)
         .map(|i| {
             let a = i as f32 / 100.0 * std::f32::consts::TAU;
-            scene.scan(&mut rng, 50.0 + 30.0 * a.cos(), 50.0 + 30.0 * a.sin(), 10_000)
+            scene.scan(
+                &mut rng,
+                50.0 + 30.0 * a.cos(),
+                50.0 + 30.0 * a.sin(),
+                10_000,
+            )
         })
         .collect();
     let queries: Vec<Point3> = (0..100_000)
@@ -209,7 +273,10 @@ fn main() {
     let mut xs: Vec<f32> = ikd.flatten().iter().map(|p| p.x).collect();
     xs.sort_by(f32::total_cmp);
     let x5 = xs[xs.len() / 20];
-    let del_box = Aabb::new(Point3::new(-1.0, -1.0, -1.0), Point3::new(x5, SIDE_M + 1.0, HEIGHT_M + 1.0));
+    let del_box = Aabb::new(
+        Point3::new(-1.0, -1.0, -1.0),
+        Point3::new(x5, SIDE_M + 1.0, HEIGHT_M + 1.0),
+    );
     let t = Instant::now();
     let deleted = ikd.delete_box(&del_box);
     let ikd_delete_ms = ms(t);
@@ -240,7 +307,11 @@ fn main() {
     }
     let km_build_ms = ms(t);
     let km_bpp = rss_bytes().saturating_sub(rss0) as f64 / n as f64;
-    let mut km_points: Vec<([f32; 3], u32)> = map_arr.iter().enumerate().map(|(i, p)| (*p, i as u32)).collect();
+    let mut km_points: Vec<([f32; 3], u32)> = map_arr
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (*p, i as u32))
+        .collect();
     let t = Instant::now();
     for s in &scans {
         for p in s {
@@ -257,8 +328,11 @@ fn main() {
             km_points.push((arr(p), id));
         }
     }
-    let in_box: Vec<([f32; 3], u32)> =
-        km_points.iter().filter(|(p, _)| del_box.contains(&Point3::from(*p))).copied().collect();
+    let in_box: Vec<([f32; 3], u32)> = km_points
+        .iter()
+        .filter(|(p, _)| del_box.contains(&Point3::from(*p)))
+        .copied()
+        .collect();
     let t = Instant::now();
     for (p, i) in &in_box {
         km.remove(p, *i);
@@ -267,7 +341,10 @@ fn main() {
     let t = Instant::now();
     let mut acc = 0.0f32;
     for q in &queries {
-        let r = km.query(&arr(q)).nearest_n::<SquaredEuclidean<f32>>(k5).execute();
+        let r = km
+            .query(&arr(q))
+            .nearest_n::<SquaredEuclidean<f32>>(k5)
+            .execute();
         acc += r.last().map_or(0.0, |x| x.distance);
     }
     let km_knn_ns = t.elapsed().as_secs_f64() * 1e9 / queries.len() as f64;
@@ -282,7 +359,8 @@ fn main() {
         let mut all = map_arr.clone();
         let t0 = Instant::now();
         all.extend(s.iter().map(arr));
-        let tree: ImmutableKdTree<f32, 3> = ImmutableKdTree::new_from_slice(&all).expect("kiddo build");
+        let tree: ImmutableKdTree<f32, 3> =
+            ImmutableKdTree::new_from_slice(&all).expect("kiddo build");
         black_box(tree.size());
         black_box(t0);
     }
@@ -290,14 +368,18 @@ fn main() {
     let final_arr: Vec<[f32; 3]> = final_points.iter().map(arr).collect();
     let rss0 = rss_bytes();
     let t = Instant::now();
-    let ki: ImmutableKdTree<f32, 3> = ImmutableKdTree::new_from_slice(&final_arr).expect("kiddo build");
+    let ki: ImmutableKdTree<f32, 3> =
+        ImmutableKdTree::new_from_slice(&final_arr).expect("kiddo build");
     let ki_build_ms = ms(t);
     let ki_bpp = rss_bytes().saturating_sub(rss0) as f64 / final_arr.len() as f64;
     let t = Instant::now();
     let c = thread_cpu_ns();
     let mut acc = 0.0f32;
     for q in &queries {
-        let r = ki.query(&arr(q)).nearest_n::<SquaredEuclidean<f32>>(k5).execute();
+        let r = ki
+            .query(&arr(q))
+            .nearest_n::<SquaredEuclidean<f32>>(k5)
+            .execute();
         acc += r.last().map_or(0.0, |x| x.distance);
     }
     let ki_knn_ns = t.elapsed().as_secs_f64() * 1e9 / queries.len() as f64;
@@ -307,7 +389,15 @@ fn main() {
     // ---- the ikd-Tree paper's randomized protocol ----
     let mut rng = ChaCha8Rng::seed_from_u64(7);
     let cube = |rng: &mut ChaCha8Rng, m: usize| -> Vec<Point3> {
-        (0..m).map(|_| Point3::new(rng.random::<f32>() * 10.0, rng.random::<f32>() * 10.0, rng.random::<f32>() * 10.0)).collect()
+        (0..m)
+            .map(|_| {
+                Point3::new(
+                    rng.random::<f32>() * 10.0,
+                    rng.random::<f32>() * 10.0,
+                    rng.random::<f32>() * 10.0,
+                )
+            })
+            .collect()
     };
     let mut proto = IkdTree::new(IkdParams::default()).expect("default parameters are valid");
     proto.build(&cube(&mut rng, 20_000));
@@ -317,7 +407,10 @@ fn main() {
         let ins = cube(&mut rng, 200);
         let qs = cube(&mut rng, 200);
         let boxes: Vec<Aabb> = if op % 50 == 49 {
-            cube(&mut rng, 4).into_iter().map(|c| Aabb::around(c, 0.75)).collect()
+            cube(&mut rng, 4)
+                .into_iter()
+                .map(|c| Aabb::around(c, 0.75))
+                .collect()
         } else {
             Vec::new()
         };

@@ -177,8 +177,16 @@ impl Aabb {
     #[inline(always)]
     pub fn union(&self, o: &Aabb) -> Aabb {
         Aabb {
-            min: Point3::new(self.min.x.min(o.min.x), self.min.y.min(o.min.y), self.min.z.min(o.min.z)),
-            max: Point3::new(self.max.x.max(o.max.x), self.max.y.max(o.max.y), self.max.z.max(o.max.z)),
+            min: Point3::new(
+                self.min.x.min(o.min.x),
+                self.min.y.min(o.min.y),
+                self.min.z.min(o.min.z),
+            ),
+            max: Point3::new(
+                self.max.x.max(o.max.x),
+                self.max.y.max(o.max.y),
+                self.max.z.max(o.max.z),
+            ),
         }
     }
 

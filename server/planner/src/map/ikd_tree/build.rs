@@ -36,7 +36,11 @@ impl Arena {
             let slot = self.alloc_leaf(leaf);
             return self.alloc_node(Node::leaf(slot, n as u32, bbox));
         }
-        let ext = [bbox.max.x - bbox.min.x, bbox.max.y - bbox.min.y, bbox.max.z - bbox.min.z];
+        let ext = [
+            bbox.max.x - bbox.min.x,
+            bbox.max.y - bbox.min.y,
+            bbox.max.z - bbox.min.z,
+        ];
         let axis = if ext[0] >= ext[1] && ext[0] >= ext[2] {
             0
         } else if ext[1] >= ext[2] {

@@ -11,7 +11,11 @@ pub(crate) enum Region {
     /// Every valid point inside the closed box.
     Box(Aabb),
     /// Every valid point of voxel `key` (of side `vs` metres); `search` bounds the voxel.
-    Voxel { key: VoxelKey, vs: f32, search: Aabb },
+    Voxel {
+        key: VoxelKey,
+        vs: f32,
+        search: Aabb,
+    },
     /// Every valid point with exactly these coordinates.
     Point(Point3),
 }
@@ -68,7 +72,11 @@ impl IkdTree {
     /// O(m log n) expected for m entries.
     pub fn delete_points(&mut self, points: &[Point3]) -> usize {
         self.poll_background(false);
-        let regions: Vec<Region> = points.iter().filter(|p| p.is_finite()).map(|p| Region::Point(*p)).collect();
+        let regions: Vec<Region> = points
+            .iter()
+            .filter(|p| p.is_finite())
+            .map(|p| Region::Point(*p))
+            .collect();
         let n = self.delete_regions(&regions);
         self.finish_write();
         n
@@ -85,7 +93,11 @@ impl IkdTree {
             return 0;
         }
         self.poll_background(false);
-        let n = if self.root == NIL { 0 } else { self.restore_rec(self.root, b) };
+        let n = if self.root == NIL {
+            0
+        } else {
+            self.restore_rec(self.root, b)
+        };
         self.finish_write();
         n
     }
@@ -96,10 +108,21 @@ impl IkdTree {
         if self.root == NIL || regions.is_empty() {
             return 0;
         }
-        let mut scratch: Vec<(Aabb, u32)> =
-            regions.iter().enumerate().map(|(i, r)| (r.search_box(), i as u32)).collect();
+        let mut scratch: Vec<(Aabb, u32)> = regions
+            .iter()
+            .enumerate()
+            .map(|(i, r)| (r.search_box(), i as u32))
+            .collect();
         let mut path = Vec::with_capacity(64);
-        let (n, v) = self.delete_multi_rec(self.root, 0, regions.len(), &mut scratch, regions, &mut path, false);
+        let (n, v) = self.delete_multi_rec(
+            self.root,
+            0,
+            regions.len(),
+            &mut scratch,
+            regions,
+            &mut path,
+            false,
+        );
         if v {
             self.rebuild(self.root, &[]);
         }
@@ -128,7 +151,11 @@ impl IkdTree {
                 self.log(LogOp::Delete(regions[scratch[i].1 as usize]));
             }
         }
-        if n.flags & F_BG_ANC == 0 && scratch[lo..hi].iter().any(|r| regions[r.1 as usize].swallows(&n.bbox)) {
+        if n.flags & F_BG_ANC == 0
+            && scratch[lo..hi]
+                .iter()
+                .any(|r| regions[r.1 as usize].swallows(&n.bbox))
+        {
             let cnt = n.live() as usize;
             self.arena.label_all(id, true);
             return (cnt, !inside && self.violates(id));
@@ -161,13 +188,16 @@ impl IkdTree {
             let start = scratch.len();
             for i in lo..hi {
                 let it = scratch[i];
-                if (ci == 0 && it.0.min.get(axis) <= split) || (ci == 1 && it.0.max.get(axis) >= split) {
+                if (ci == 0 && it.0.min.get(axis) <= split)
+                    || (ci == 1 && it.0.max.get(axis) >= split)
+                {
                     scratch.push(it);
                 }
             }
             let end = scratch.len();
             if end > start {
-                let (c, vv) = self.delete_multi_rec(child, start, end, scratch, regions, path, inside);
+                let (c, vv) =
+                    self.delete_multi_rec(child, start, end, scratch, regions, path, inside);
                 total += c;
                 v[ci] = vv;
             }

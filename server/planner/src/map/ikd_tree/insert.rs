@@ -42,7 +42,10 @@ fn group_by_voxel(pts: &[Point3], vs: f32) -> Vec<(VoxelKey, f32, u32)> {
     let mut out = Vec::with_capacity(items.len());
     if let Some(packed) = packed {
         // Open addressing, linear probing; slot value = item index + 1 (0 = empty).
-        let bits = (2 * items.len()).max(16).next_power_of_two().trailing_zeros();
+        let bits = (2 * items.len())
+            .max(16)
+            .next_power_of_two()
+            .trailing_zeros();
         let mask = (1usize << bits) - 1;
         let mut table = vec![(0u64, 0u32); 1 << bits];
         for (i, &key) in packed.iter().enumerate() {
@@ -63,7 +66,12 @@ fn group_by_voxel(pts: &[Point3], vs: f32) -> Vec<(VoxelKey, f32, u32)> {
                 h = (h + 1) & mask;
             }
         }
-        out.extend(table.iter().filter(|s| s.1 != 0).map(|s| items[s.1 as usize - 1]));
+        out.extend(
+            table
+                .iter()
+                .filter(|s| s.1 != 0)
+                .map(|s| items[s.1 as usize - 1]),
+        );
     } else {
         let mut items = items;
         items.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)).then(a.2.cmp(&b.2)));
@@ -109,7 +117,11 @@ impl IkdTree {
     pub fn add_points(&mut self, points: &[Point3], downsample: bool) -> usize {
         self.poll_background(false);
         let pts: Vec<Point3> = points.iter().filter(|p| p.is_finite()).copied().collect();
-        let mut pts = if downsample { self.downsample_select(&pts) } else { pts };
+        let mut pts = if downsample {
+            self.downsample_select(&pts)
+        } else {
+            pts
+        };
         let n = pts.len();
         self.insert_points(&mut pts);
         self.finish_write();
@@ -125,7 +137,11 @@ impl IkdTree {
         let cands = group_by_voxel(pts, vs);
         let mut qs: Vec<VoxQuery> = cands
             .iter()
-            .map(|&(key, _, _)| VoxQuery { key, sb: voxel_search_box(&key, vs), best: f32::INFINITY })
+            .map(|&(key, _, _)| VoxQuery {
+                key,
+                sb: voxel_search_box(&key, vs),
+                best: f32::INFINITY,
+            })
             .collect();
         self.voxel_best_multi(&mut qs);
         let mut winners = Vec::with_capacity(cands.len());
@@ -133,7 +149,11 @@ impl IkdTree {
         for (&(key, d2, idx), q) in cands.iter().zip(&qs) {
             if d2 < q.best {
                 if q.best.is_finite() {
-                    regions.push(Region::Voxel { key, vs, search: q.sb });
+                    regions.push(Region::Voxel {
+                        key,
+                        vs,
+                        search: q.sb,
+                    });
                 }
                 winners.push(pts[idx as usize]);
             }
@@ -157,7 +177,13 @@ impl IkdTree {
         }
     }
 
-    fn insert_rec(&mut self, id: u32, pts: &mut [Point3], path: &mut Vec<u32>, inside_bg: bool) -> bool {
+    fn insert_rec(
+        &mut self,
+        id: u32,
+        pts: &mut [Point3],
+        path: &mut Vec<u32>,
+        inside_bg: bool,
+    ) -> bool {
         if pts.is_empty() {
             return false;
         }

@@ -104,14 +104,25 @@ pub struct IkdParams {
 
 impl Default for IkdParams {
     fn default() -> Self {
-        Self { alpha_bal: 0.6, alpha_del: 0.5, voxel_size: 0.2, background_rebuild_min: 1500 }
+        Self {
+            alpha_bal: 0.6,
+            alpha_del: 0.5,
+            voxel_size: 0.2,
+            background_rebuild_min: 1500,
+        }
     }
 }
 
 impl IkdParams {
     /// Checks every field's range.
     pub fn validate(&self) -> Result<(), IkdError> {
-        let bad = |name, value: f32, reason| Err(IkdError::InvalidParam { name, value: value as f64, reason });
+        let bad = |name, value: f32, reason| {
+            Err(IkdError::InvalidParam {
+                name,
+                value: value as f64,
+                reason,
+            })
+        };
         if !(0.5..=1.0).contains(&self.alpha_bal) {
             return bad("alpha_bal", self.alpha_bal, "must be in [0.5, 1]");
         }
@@ -119,7 +130,11 @@ impl IkdParams {
             return bad("alpha_del", self.alpha_del, "must be in (0, 1]");
         }
         if !(self.voxel_size.is_finite() && self.voxel_size > 0.0) {
-            return bad("voxel_size", self.voxel_size, "must be a positive finite number of metres");
+            return bad(
+                "voxel_size",
+                self.voxel_size,
+                "must be a positive finite number of metres",
+            );
         }
         Ok(())
     }
@@ -153,7 +168,13 @@ pub struct IkdTree {
 
 impl Default for IkdTree {
     fn default() -> Self {
-        Self { params: IkdParams::default(), arena: Arena::default(), root: NIL, bg: None, stats: IkdStats::default() }
+        Self {
+            params: IkdParams::default(),
+            arena: Arena::default(),
+            root: NIL,
+            bg: None,
+            stats: IkdStats::default(),
+        }
     }
 }
 
@@ -164,14 +185,22 @@ pub(crate) type VoxelKey = [i64; 3];
 #[inline]
 pub(crate) fn voxel_key(p: &Point3, vs: f32) -> VoxelKey {
     let vs = vs as f64;
-    [floor_i64(p.x as f64 / vs), floor_i64(p.y as f64 / vs), floor_i64(p.z as f64 / vs)]
+    [
+        floor_i64(p.x as f64 / vs),
+        floor_i64(p.y as f64 / vs),
+        floor_i64(p.z as f64 / vs),
+    ]
 }
 
 /// `q.floor() as i64` without a libm call (baseline x86-64 has no rounding instruction); saturating.
 #[inline(always)]
 fn floor_i64(q: f64) -> i64 {
     let t = q as i64;
-    if (t as f64) > q { t.saturating_sub(1) } else { t }
+    if (t as f64) > q {
+        t.saturating_sub(1)
+    } else {
+        t
+    }
 }
 
 /// Squared distance from `p` to the centre of voxel `key`, square metres.
@@ -193,14 +222,20 @@ pub(crate) fn voxel_search_box(key: &VoxelKey, vs: f32) -> Aabb {
         let v = (k as f64 + 1.0) * vs;
         (v + (vs * 1e-3 + v.abs() * 1e-6)) as f32
     };
-    Aabb::new(Point3::new(lo(key[0]), lo(key[1]), lo(key[2])), Point3::new(hi(key[0]), hi(key[1]), hi(key[2])))
+    Aabb::new(
+        Point3::new(lo(key[0]), lo(key[1]), lo(key[2])),
+        Point3::new(hi(key[0]), hi(key[1]), hi(key[2])),
+    )
 }
 
 impl IkdTree {
     /// An empty tree with `params` (checked: see [`IkdParams`]).
     pub fn new(params: IkdParams) -> Result<Self, IkdError> {
         params.validate()?;
-        Ok(Self { params, ..Self::default() })
+        Ok(Self {
+            params,
+            ..Self::default()
+        })
     }
 
     /// The parameters the tree was made with.
@@ -217,7 +252,11 @@ impl IkdTree {
         self.bg = None;
         let mut pts: Vec<Point3> = points.iter().filter(|p| p.is_finite()).copied().collect();
         self.arena = Arena::default();
-        self.root = if pts.is_empty() { NIL } else { self.arena.build(&mut pts) };
+        self.root = if pts.is_empty() {
+            NIL
+        } else {
+            self.arena.build(&mut pts)
+        };
         pts.len()
     }
 
@@ -239,13 +278,19 @@ impl IkdTree {
     /// Nodes on the longest root-to-leaf path (0 for an empty tree; a leaf bucket counts as one node).
     /// O(nodes).
     pub fn depth(&self) -> usize {
-        if self.root == NIL { 0 } else { self.arena.depth(self.root) }
+        if self.root == NIL {
+            0
+        } else {
+            self.arena.depth(self.root)
+        }
     }
 
     /// Heap bytes held by the tree's arena (capacities, so what the allocator actually holds), plus the
     /// operation log of a background rebuild in flight. The thread's own copy is not counted. O(1).
     pub fn memory_bytes(&self) -> usize {
-        size_of::<Self>() + self.arena.memory_bytes() + self.bg.as_ref().map_or(0, |b| b.log_bytes())
+        size_of::<Self>()
+            + self.arena.memory_bytes()
+            + self.bg.as_ref().map_or(0, |b| b.log_bytes())
     }
 
     /// Work counters since the tree was made.
@@ -278,6 +323,10 @@ impl IkdTree {
     }
 
     fn root_node(&self) -> Option<&node::Node> {
-        if self.root == NIL { None } else { Some(&self.arena.nodes[self.root as usize]) }
+        if self.root == NIL {
+            None
+        } else {
+            Some(&self.arena.nodes[self.root as usize])
+        }
     }
 }

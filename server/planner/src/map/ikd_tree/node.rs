@@ -62,7 +62,16 @@ impl Node {
     }
 
     pub fn leaf(slot: u32, size: u32, bbox: Aabb) -> Node {
-        Node { bbox, size, invalid: 0, a: slot, b: NIL, split: 0.0, axis: 0, flags: F_LEAF }
+        Node {
+            bbox,
+            size,
+            invalid: 0,
+            a: slot,
+            b: NIL,
+            split: 0.0,
+            axis: 0,
+            flags: F_LEAF,
+        }
     }
 }
 
@@ -74,7 +83,10 @@ pub(crate) struct Leaf {
 }
 
 impl Leaf {
-    pub const EMPTY: Leaf = Leaf { pts: [Point3::new(0.0, 0.0, 0.0); LEAF_CAP], dead: 0 };
+    pub const EMPTY: Leaf = Leaf {
+        pts: [Point3::new(0.0, 0.0, 0.0); LEAF_CAP],
+        dead: 0,
+    };
 }
 
 /// Mask with the low `n` bits set.
@@ -246,6 +258,10 @@ impl Arena {
     /// Maximum number of nodes on a root-to-leaf path below `id` (1 for a leaf).
     pub fn depth(&self, id: u32) -> usize {
         let n = &self.nodes[id as usize];
-        if n.is_leaf() { 1 } else { 1 + self.depth(n.a).max(self.depth(n.b)) }
+        if n.is_leaf() {
+            1
+        } else {
+            1 + self.depth(n.a).max(self.depth(n.b))
+        }
     }
 }

@@ -67,14 +67,23 @@ impl IkdTree {
             return false;
         }
         // One point of slack: a fresh build splits an odd count one-off, which must pass even at 0.5.
-        let big = self.arena.nodes[n.a as usize].size.max(self.arena.nodes[n.b as usize].size);
+        let big = self.arena.nodes[n.a as usize]
+            .size
+            .max(self.arena.nodes[n.b as usize].size);
         big as f32 > self.params.alpha_bal * size + 1.0
     }
 
     /// Called on internal node `id` after a write below it, with whether each child violates a criterion.
     /// Returns true when `id` itself violates (its parent decides); otherwise rebuilds the violating
     /// children. `path` holds `id`'s ancestors. Inside a background subtree nothing is rebuilt.
-    pub(crate) fn resolve(&mut self, id: u32, va: bool, vb: bool, path: &mut Vec<u32>, inside_bg: bool) -> bool {
+    pub(crate) fn resolve(
+        &mut self,
+        id: u32,
+        va: bool,
+        vb: bool,
+        path: &mut Vec<u32>,
+        inside_bg: bool,
+    ) -> bool {
         if inside_bg {
             return false;
         }
@@ -101,7 +110,10 @@ impl IkdTree {
     /// background rebuild is in flight, in place otherwise.
     pub(crate) fn rebuild(&mut self, id: u32, ancestors: &[u32]) {
         let live = self.arena.nodes[id as usize].live() as usize;
-        if live >= self.params.background_rebuild_min && self.bg.is_none() && !self.arena.nodes[id as usize].is_leaf() {
+        if live >= self.params.background_rebuild_min
+            && self.bg.is_none()
+            && !self.arena.nodes[id as usize].is_leaf()
+        {
             self.launch_background(id, ancestors, live);
         } else {
             self.rebuild_with(id, &[]);
@@ -125,18 +137,25 @@ impl IkdTree {
     fn launch_background(&mut self, id: u32, ancestors: &[u32], live: usize) {
         let mut pts = Vec::with_capacity(live);
         self.arena.collect_live(id, false, &mut pts);
-        let spawned = std::thread::Builder::new().name(REBUILD_THREAD.into()).spawn(move || {
-            let mut arena = Arena::default();
-            let root = arena.build(&mut pts);
-            (arena, root)
-        });
+        let spawned = std::thread::Builder::new()
+            .name(REBUILD_THREAD.into())
+            .spawn(move || {
+                let mut arena = Arena::default();
+                let root = arena.build(&mut pts);
+                (arena, root)
+            });
         match spawned {
             Ok(handle) => {
                 self.arena.nodes[id as usize].flags |= F_BG_ROOT;
                 for &a in ancestors {
                     self.arena.nodes[a as usize].flags |= F_BG_ANC;
                 }
-                self.bg = Some(BgJob { root: id, ancestors: ancestors.to_vec(), log: Vec::new(), handle });
+                self.bg = Some(BgJob {
+                    root: id,
+                    ancestors: ancestors.to_vec(),
+                    log: Vec::new(),
+                    handle,
+                });
             }
             Err(_) => {
                 // No thread to be had: do the work here.
@@ -171,8 +190,17 @@ impl IkdTree {
         }
         match bg.handle.join() {
             Ok((arena, root)) => {
-                let params = IkdParams { background_rebuild_min: usize::MAX, ..self.params };
-                let mut sub = IkdTree { params, arena, root, bg: None, stats: Default::default() };
+                let params = IkdParams {
+                    background_rebuild_min: usize::MAX,
+                    ..self.params
+                };
+                let mut sub = IkdTree {
+                    params,
+                    arena,
+                    root,
+                    bg: None,
+                    stats: Default::default(),
+                };
                 let n_ops = bg.log.len() as u64;
                 let mut deletes = Vec::new();
                 for op in bg.log {

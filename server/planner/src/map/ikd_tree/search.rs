@@ -47,11 +47,21 @@ struct Knn {
 impl Knn {
     fn new(k: usize, max2: f32) -> Self {
         let best = if k <= SORTED_MAX_K {
-            Best::Sorted { k, items: Vec::with_capacity(k + 1) }
+            Best::Sorted {
+                k,
+                items: Vec::with_capacity(k + 1),
+            }
         } else {
-            Best::Heap { k, heap: BinaryHeap::with_capacity(k + 1) }
+            Best::Heap {
+                k,
+                heap: BinaryHeap::with_capacity(k + 1),
+            }
         };
-        Knn { best, max2, bound: max2 }
+        Knn {
+            best,
+            max2,
+            bound: max2,
+        }
     }
 
     #[inline(always)]
@@ -94,7 +104,11 @@ impl Knn {
     fn into_sorted(self) -> Vec<(Point3, f32)> {
         match self.best {
             Best::Sorted { items, .. } => items.into_iter().map(|(d, p)| (p, d)).collect(),
-            Best::Heap { heap, .. } => heap.into_sorted_vec().into_iter().map(|c| (c.1, c.0)).collect(),
+            Best::Heap { heap, .. } => heap
+                .into_sorted_vec()
+                .into_iter()
+                .map(|c| (c.1, c.0))
+                .collect(),
         }
     }
 }
@@ -264,7 +278,11 @@ impl IkdTree {
         if self.root == NIL || qs.is_empty() {
             return;
         }
-        let mut scratch: Vec<(Aabb, u32)> = qs.iter().enumerate().map(|(i, q)| (q.sb, i as u32)).collect();
+        let mut scratch: Vec<(Aabb, u32)> = qs
+            .iter()
+            .enumerate()
+            .map(|(i, q)| (q.sb, i as u32))
+            .collect();
         self.voxel_multi_rec(self.root, 0, qs.len(), &mut scratch, qs, false);
     }
 
@@ -285,8 +303,7 @@ impl IkdTree {
             let vs = self.params.voxel_size;
             let leaf = &self.arena.leaves[n.a as usize];
             let dead = if forced { 0 } else { leaf.dead };
-            for i in lo..hi {
-                let (sb, qi) = scratch[i];
+            for &(sb, qi) in &scratch[lo..hi] {
                 if !sb.intersects(&n.bbox) {
                     continue;
                 }

@@ -12,7 +12,11 @@ fn key(p: &Point3) -> [u32; 3] {
 }
 
 fn sorted(mut v: Vec<Point3>) -> Vec<Point3> {
-    v.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)).then(a.z.total_cmp(&b.z)));
+    v.sort_by(|a, b| {
+        a.x.total_cmp(&b.x)
+            .then(a.y.total_cmp(&b.y))
+            .then(a.z.total_cmp(&b.z))
+    });
     v
 }
 
@@ -38,7 +42,11 @@ struct Oracle {
 
 impl Oracle {
     fn new(vs: f32) -> Self {
-        Oracle { live: Vec::new(), tombs: Vec::new(), vs }
+        Oracle {
+            live: Vec::new(),
+            tombs: Vec::new(),
+            vs,
+        }
     }
 
     fn points(&self) -> Vec<Point3> {
@@ -46,7 +54,11 @@ impl Oracle {
     }
 
     fn build(&mut self, pts: &[Point3]) -> usize {
-        self.live = pts.iter().filter(|p| p.is_finite()).map(|p| (*p, 0)).collect();
+        self.live = pts
+            .iter()
+            .filter(|p| p.is_finite())
+            .map(|p| (*p, 0))
+            .collect();
         self.tombs.clear();
         self.live.len()
     }
@@ -94,21 +106,41 @@ impl Oracle {
 }
 
 /// Compares every query of `t` with the oracle at `q`.
-fn check_queries(t: &IkdTree, o: &Oracle, q: &Point3, k: usize, r: f32, b: &Aabb) -> Result<(), TestCaseError> {
+fn check_queries(
+    t: &IkdTree,
+    o: &Oracle,
+    q: &Point3,
+    k: usize,
+    r: f32,
+    b: &Aabb,
+) -> Result<(), TestCaseError> {
     let all = o.dists(q);
     let live_keys: std::collections::HashSet<[u32; 3]> = o.live.iter().map(|e| key(&e.0)).collect();
     let got = t.nearest(q, k);
     let want: Vec<f32> = all.iter().copied().take(k).collect();
     prop_assert_eq!(got.iter().map(|g| g.1).collect::<Vec<_>>(), want.clone());
     for (p, d) in &got {
-        prop_assert!(live_keys.contains(&key(p)), "nearest returned a point not in the map: {:?}", p);
+        prop_assert!(
+            live_keys.contains(&key(p)),
+            "nearest returned a point not in the map: {:?}",
+            p
+        );
         prop_assert_eq!(p.dist2(q), *d);
     }
     let got = t.nearest_within(q, k, r);
-    let want: Vec<f32> = all.iter().copied().filter(|d| *d <= r * r).take(k).collect();
+    let want: Vec<f32> = all
+        .iter()
+        .copied()
+        .filter(|d| *d <= r * r)
+        .take(k)
+        .collect();
     prop_assert_eq!(got.iter().map(|g| g.1).collect::<Vec<_>>(), want);
     let got: Vec<Point3> = t.within_radius(q, r).into_iter().map(|g| g.0).collect();
-    let want: Vec<Point3> = o.points().into_iter().filter(|p| p.dist2(q) <= r * r).collect();
+    let want: Vec<Point3> = o
+        .points()
+        .into_iter()
+        .filter(|p| p.dist2(q) <= r * r)
+        .collect();
     prop_assert_eq!(sorted(got), sorted(want));
     let got = t.within_box(b);
     let want: Vec<Point3> = o.points().into_iter().filter(|p| b.contains(p)).collect();
@@ -135,13 +167,25 @@ fn coord() -> impl Strategy<Value = f32> {
 }
 
 fn point(flat: bool) -> impl Strategy<Value = Point3> {
-    (coord(), coord(), coord()).prop_map(move |(x, y, z)| Point3::new(if flat { 0.5 } else { x }, y, z))
+    (coord(), coord(), coord())
+        .prop_map(move |(x, y, z)| Point3::new(if flat { 0.5 } else { x }, y, z))
 }
 
 fn aabb() -> impl Strategy<Value = Aabb> {
-    (coord(), coord(), coord(), 0.0f32..1.5, 0.0f32..1.5, 0.0f32..2.5).prop_map(|(x, y, z, a, b, c)| {
-        Aabb::new(Point3::new(x - a, y - b, z - c), Point3::new(x + a, y + b, z + c))
-    })
+    (
+        coord(),
+        coord(),
+        coord(),
+        0.0f32..1.5,
+        0.0f32..1.5,
+        0.0f32..2.5,
+    )
+        .prop_map(|(x, y, z, a, b, c)| {
+            Aabb::new(
+                Point3::new(x - a, y - b, z - c),
+                Point3::new(x + a, y + b, z + c),
+            )
+        })
 }
 
 fn op(flat: bool) -> impl Strategy<Value = Op> {
@@ -158,17 +202,20 @@ fn op(flat: bool) -> impl Strategy<Value = Op> {
 }
 
 fn params() -> impl Strategy<Value = IkdParams> {
-    (prop_oneof![Just(0.6f32), Just(0.5), Just(0.9)], prop_oneof![Just(0.5f32), Just(0.3), Just(1.0)], prop_oneof![
-        Just(0.2f32),
-        Just(0.07),
-        Just(0.5)
-    ], prop_oneof![Just(1500usize), Just(40), Just(usize::MAX)])
-        .prop_map(|(alpha_bal, alpha_del, voxel_size, background_rebuild_min)| IkdParams {
-            alpha_bal,
-            alpha_del,
-            voxel_size,
-            background_rebuild_min,
-        })
+    (
+        prop_oneof![Just(0.6f32), Just(0.5), Just(0.9)],
+        prop_oneof![Just(0.5f32), Just(0.3), Just(1.0)],
+        prop_oneof![Just(0.2f32), Just(0.07), Just(0.5)],
+        prop_oneof![Just(1500usize), Just(40), Just(usize::MAX)],
+    )
+        .prop_map(
+            |(alpha_bal, alpha_del, voxel_size, background_rebuild_min)| IkdParams {
+                alpha_bal,
+                alpha_del,
+                voxel_size,
+                background_rebuild_min,
+            },
+        )
 }
 
 fn run_ops(params: IkdParams, ops: &[Op]) -> Result<(), TestCaseError> {
@@ -178,7 +225,9 @@ fn run_ops(params: IkdParams, ops: &[Op]) -> Result<(), TestCaseError> {
         let tag = step as u64 + 1;
         match op {
             Op::Build(v) => prop_assert_eq!(t.build(v), o.build(v)),
-            Op::Add(v, d) => prop_assert_eq!(t.add_points(v, *d), o.add(v, *d, tag), "add #{}", step),
+            Op::Add(v, d) => {
+                prop_assert_eq!(t.add_points(v, *d), o.add(v, *d, tag), "add #{}", step)
+            }
             Op::DeleteBox(b) => prop_assert_eq!(t.delete_box(b), o.delete_where(|p| b.contains(p))),
             Op::DeletePoints(idx, extra) => {
                 let live = o.points();
@@ -194,10 +243,19 @@ fn run_ops(params: IkdParams, ops: &[Op]) -> Result<(), TestCaseError> {
                 let before = o.points();
                 let restored = t.restore_box(b);
                 let mut now = t.flatten();
-                prop_assert!(remove_multiset(&mut now, &before), "restore lost valid points");
+                prop_assert!(
+                    remove_multiset(&mut now, &before),
+                    "restore lost valid points"
+                );
                 prop_assert_eq!(now.len(), restored, "restore count");
-                prop_assert!(now.iter().all(|p| b.contains(p)), "restored a point outside the box");
-                prop_assert!(remove_multiset(&mut o.tombs, &now), "restored a point never deleted");
+                prop_assert!(
+                    now.iter().all(|p| b.contains(p)),
+                    "restored a point outside the box"
+                );
+                prop_assert!(
+                    remove_multiset(&mut o.tombs, &now),
+                    "restored a point never deleted"
+                );
                 o.live.extend(now.into_iter().map(|p| (p, 0)));
             }
             Op::Wait => t.wait_rebuild(),
@@ -240,7 +298,13 @@ proptest! {
 
 fn random_points(rng: &mut ChaCha8Rng, n: usize, side: f32) -> Vec<Point3> {
     (0..n)
-        .map(|_| Point3::new(rng.random::<f32>() * side, rng.random::<f32>() * side, rng.random::<f32>() * side))
+        .map(|_| {
+            Point3::new(
+                rng.random::<f32>() * side,
+                rng.random::<f32>() * side,
+                rng.random::<f32>() * side,
+            )
+        })
         .collect()
 }
 
@@ -261,7 +325,11 @@ fn depth_after_random_inserts(n: usize, batch: usize) {
     t.wait_rebuild();
     assert_eq!(t.len(), n);
     let bound = 3.0 * (n as f64).log2();
-    assert!((t.depth() as f64) <= bound, "depth {} > 3 log2 n = {bound}", t.depth());
+    assert!(
+        (t.depth() as f64) <= bound,
+        "depth {} > 3 log2 n = {bound}",
+        t.depth()
+    );
     for q in random_points(&mut rng, 50, 100.0) {
         let got: Vec<f32> = t.nearest(&q, 5).iter().map(|g| g.1).collect();
         assert_eq!(got, brute_nearest(&pts, &q, 5));
@@ -287,7 +355,11 @@ fn sorted_inserts_stay_balanced() {
     }
     t.wait_rebuild();
     assert_eq!(t.len(), n);
-    assert!((t.depth() as f64) <= 3.0 * (n as f64).log2(), "depth {}", t.depth());
+    assert!(
+        (t.depth() as f64) <= 3.0 * (n as f64).log2(),
+        "depth {}",
+        t.depth()
+    );
     assert!(t.stats().rebuilds_in_place + t.stats().rebuilds_background > 0);
 }
 
@@ -301,15 +373,26 @@ fn duplicates_and_one_axis_value() {
     }
     assert_eq!(t.len(), 5000);
     assert!(t.depth() <= 3 * 13, "depth {}", t.depth());
-    assert_eq!(t.nearest(&Point3::new(1.0, 2.0, 4.0), 3).iter().map(|g| g.1).collect::<Vec<_>>(), vec![1.0; 3]);
-    assert_eq!(t.add_points(&[p], true), 0, "an equally near point does not replace the voxel's points");
+    assert_eq!(
+        t.nearest(&Point3::new(1.0, 2.0, 4.0), 3)
+            .iter()
+            .map(|g| g.1)
+            .collect::<Vec<_>>(),
+        vec![1.0; 3]
+    );
+    assert_eq!(
+        t.add_points(&[p], true),
+        0,
+        "an equally near point does not replace the voxel's points"
+    );
     assert_eq!(t.delete_points(&[p]), 5000);
     assert!(t.is_empty());
     assert_eq!(t.nearest_distance(&p), None);
 
     let mut rng = ChaCha8Rng::seed_from_u64(3);
-    let flat: Vec<Point3> =
-        (0..20_000).map(|_| Point3::new(rng.random::<f32>() * 10.0, rng.random::<f32>() * 10.0, 0.0)).collect();
+    let flat: Vec<Point3> = (0..20_000)
+        .map(|_| Point3::new(rng.random::<f32>() * 10.0, rng.random::<f32>() * 10.0, 0.0))
+        .collect();
     let mut t = IkdTree::new(IkdParams::default()).expect("params");
     for c in flat.chunks(7) {
         t.add_points(c, false);
@@ -335,7 +418,10 @@ fn box_deletes_reclaim_memory() {
     let mut deleted = 0;
     for i in 0..9 {
         let x0 = i as f32 * 10.0;
-        let b = Aabb::new(Point3::new(x0, -1.0, -1.0), Point3::new(x0 + 10.0, 101.0, 101.0));
+        let b = Aabb::new(
+            Point3::new(x0, -1.0, -1.0),
+            Point3::new(x0 + 10.0, 101.0, 101.0),
+        );
         deleted += t.delete_box(&b);
         assert_eq!(t.len(), n - deleted);
     }
@@ -343,10 +429,21 @@ fn box_deletes_reclaim_memory() {
     assert_eq!(deleted, want);
     t.wait_rebuild();
     assert_eq!(t.len(), n - want);
-    assert_eq!(t.tree_size(), t.len(), "every tombstone is reclaimed by the rebuilds");
+    assert_eq!(
+        t.tree_size(),
+        t.len(),
+        "every tombstone is reclaimed by the rebuilds"
+    );
     let after = t.memory_bytes();
-    assert!(after * 4 < full, "memory not reclaimed: {full} -> {after} bytes");
-    assert!(after / t.len() <= 64, "{} bytes per point after deleting", after / t.len());
+    assert!(
+        after * 4 < full,
+        "memory not reclaimed: {full} -> {after} bytes"
+    );
+    assert!(
+        after / t.len() <= 64,
+        "{} bytes per point after deleting",
+        after / t.len()
+    );
     assert!(t.stats().compactions > 0);
     let rest: Vec<Point3> = pts.iter().filter(|p| p.x > 90.0).copied().collect();
     for q in random_points(&mut rng, 50, 100.0) {
@@ -369,7 +466,10 @@ fn background_rebuild_replays_the_log() {
     let mut saw_flight = t.rebuild_in_flight();
     for i in 0..200u64 {
         let add = random_points(&mut rng, 50, 50.0);
-        assert_eq!(t.add_points(&add, i % 2 == 0), o.add(&add, i % 2 == 0, i + 1));
+        assert_eq!(
+            t.add_points(&add, i % 2 == 0),
+            o.add(&add, i % 2 == 0, i + 1)
+        );
         let c = random_points(&mut rng, 1, 50.0)[0];
         let b = Aabb::around(c, 1.0);
         assert_eq!(t.delete_box(&b), o.delete_where(|p| b.contains(p)));
@@ -386,7 +486,12 @@ fn background_rebuild_replays_the_log() {
 
 #[test]
 fn restore_brings_back_unreclaimed_tombstones() {
-    let params = IkdParams { alpha_bal: 1.0, alpha_del: 1.0, background_rebuild_min: usize::MAX, ..Default::default() };
+    let params = IkdParams {
+        alpha_bal: 1.0,
+        alpha_del: 1.0,
+        background_rebuild_min: usize::MAX,
+        ..Default::default()
+    };
     let mut rng = ChaCha8Rng::seed_from_u64(9);
     let pts = random_points(&mut rng, 5000, 10.0);
     let mut t = IkdTree::new(params).expect("params");
@@ -403,11 +508,33 @@ fn restore_brings_back_unreclaimed_tombstones() {
 
 #[test]
 fn rejects_bad_input() {
-    assert!(IkdTree::new(IkdParams { alpha_bal: 0.4, ..Default::default() }).is_err());
-    assert!(IkdTree::new(IkdParams { alpha_del: 0.0, ..Default::default() }).is_err());
-    assert!(IkdTree::new(IkdParams { voxel_size: f32::NAN, ..Default::default() }).is_err());
+    assert!(
+        IkdTree::new(IkdParams {
+            alpha_bal: 0.4,
+            ..Default::default()
+        })
+        .is_err()
+    );
+    assert!(
+        IkdTree::new(IkdParams {
+            alpha_del: 0.0,
+            ..Default::default()
+        })
+        .is_err()
+    );
+    assert!(
+        IkdTree::new(IkdParams {
+            voxel_size: f32::NAN,
+            ..Default::default()
+        })
+        .is_err()
+    );
     let mut t = IkdTree::default();
-    let bad = [Point3::new(f32::NAN, 0.0, 0.0), Point3::new(0.0, f32::INFINITY, 0.0), Point3::new(1.0, 1.0, 1.0)];
+    let bad = [
+        Point3::new(f32::NAN, 0.0, 0.0),
+        Point3::new(0.0, f32::INFINITY, 0.0),
+        Point3::new(1.0, 1.0, 1.0),
+    ];
     assert_eq!(t.add_points(&bad, true), 1);
     assert_eq!(t.add_points(&bad, false), 1);
     assert!(t.nearest(&bad[0], 3).is_empty());
