@@ -1,6 +1,7 @@
 //! Side-by-side benchmark of the live map (ikd-tree) against kiddo, printing ONE JSON line.
 //!
 //! `cargo run --release -p shift-planner --example map_bench [-- POINTS]` (default 1 000 000 points).
+//! With `MAP_BENCH_IKD_ONLY=1` in the environment only the ikd-tree part runs (a profiling aid).
 //!
 //! Scene: a 100 m × 100 m site, 3 m high, in the map frame (metres): the ground (z ≈ 0) and walls (a
 //! perimeter and a grid of 8 m room walls), every point with 1 cm of sensor noise along the surface
@@ -295,6 +296,16 @@ fn main() {
     let ikd_bpp_after = ikd.memory_bytes() as f64 / ikd.len() as f64;
     let final_points = ikd.flatten();
 
+    if std::env::var_os("MAP_BENCH_IKD_ONLY").is_some() {
+        // Profiling aid: the ikd-tree figures alone, without the slow kiddo runs.
+        let out = serde_json::json!({"points": n, "ikd": {
+            "build_ms": round(ikd_build_ms, 2), "insert_scan_us": round(ikd_scan_us, 1),
+            "insert_scan_cpu_us": round(ikd_scan_cpu_us, 1), "delete_box_ms": round(ikd_delete_ms, 3),
+            "knn5_ns": round(ikd_knn_ns, 1), "knn5_cpu_ns": round(ikd_knn_cpu_ns, 1),
+            "bytes_per_point": round(ikd_bpp, 2), "bytes_per_point_after_updates": round(ikd_bpp_after, 2)}});
+        println!("{out}");
+        return;
+    }
     // ---- kiddo mutable ----
     let rss0 = rss_bytes();
     let t = Instant::now();

@@ -161,7 +161,8 @@ impl IkdTree {
             return (cnt, !inside && self.violates(id));
         }
         if n.is_leaf() {
-            let leaf = &mut self.arena.leaves[n.a as usize];
+            let leaf = &self.arena.leaves[n.a as usize];
+            let mut dead = n.b;
             let mut cnt = 0;
             for &(sb, r) in &scratch[lo..hi] {
                 if !sb.intersects(&n.bbox) {
@@ -169,13 +170,15 @@ impl IkdTree {
                 }
                 let region = &regions[r as usize];
                 for i in 0..n.size as usize {
-                    if leaf.dead & (1 << i) == 0 && region.matches(&leaf.pts[i]) {
-                        leaf.dead |= 1 << i;
+                    if dead & (1 << i) == 0 && region.matches(&leaf.pts[i]) {
+                        dead |= 1 << i;
                         cnt += 1;
                     }
                 }
             }
-            self.arena.nodes[id as usize].invalid += cnt as u32;
+            let node = &mut self.arena.nodes[id as usize];
+            node.b = dead;
+            node.invalid += cnt as u32;
             return (cnt, cnt > 0 && !inside && self.violates(id));
         }
         self.arena.push_down(id);
@@ -219,15 +222,18 @@ impl IkdTree {
             return n.invalid as usize;
         }
         if n.is_leaf() {
-            let leaf = &mut self.arena.leaves[n.a as usize];
+            let leaf = &self.arena.leaves[n.a as usize];
+            let mut dead = n.b;
             let mut cnt = 0;
             for i in 0..n.size as usize {
-                if leaf.dead & (1 << i) != 0 && b.contains(&leaf.pts[i]) {
-                    leaf.dead &= !(1 << i);
+                if dead & (1 << i) != 0 && b.contains(&leaf.pts[i]) {
+                    dead &= !(1 << i);
                     cnt += 1;
                 }
             }
-            self.arena.nodes[id as usize].invalid -= cnt;
+            let node = &mut self.arena.nodes[id as usize];
+            node.b = dead;
+            node.invalid -= cnt;
             return cnt as usize;
         }
         self.arena.push_down(id);

@@ -9,7 +9,7 @@ use super::node::{Arena, F_BG_ANC, F_BG_ROOT, NIL};
 use super::{IkdParams, IkdTree};
 
 /// Subtrees with fewer points than this are not checked for balance (a handful of leaves).
-const BALANCE_MIN: u32 = 64;
+const BALANCE_MIN: u32 = 4 * super::node::LEAF_CAP as u32;
 
 /// Name of the background rebuild thread.
 pub(crate) const REBUILD_THREAD: &str = "ikd-rebuild";

@@ -143,7 +143,7 @@ impl IkdTree {
         }
         if n.is_leaf() {
             let leaf = &self.arena.leaves[n.a as usize];
-            let dead = if forced { 0 } else { leaf.dead };
+            let dead = if forced { 0 } else { n.b };
             for (i, p) in leaf.pts[..n.size as usize].iter().enumerate() {
                 let d2 = p.dist2(q);
                 if d2 <= knn.bound && dead & (1 << i) == 0 {
@@ -183,7 +183,7 @@ impl IkdTree {
         }
         if n.is_leaf() {
             let leaf = &self.arena.leaves[n.a as usize];
-            let dead = if forced { 0 } else { leaf.dead };
+            let dead = if forced { 0 } else { n.b };
             for (i, p) in leaf.pts[..n.size as usize].iter().enumerate() {
                 let d2 = p.dist2(q);
                 if d2 < *best && dead & (1 << i) == 0 {
@@ -222,7 +222,7 @@ impl IkdTree {
         }
         if n.is_leaf() {
             let leaf = &self.arena.leaves[n.a as usize];
-            let dead = if forced { 0 } else { leaf.dead };
+            let dead = if forced { 0 } else { n.b };
             for (i, p) in leaf.pts[..n.size as usize].iter().enumerate() {
                 let d2 = p.dist2(q);
                 if d2 <= r2 && dead & (1 << i) == 0 {
@@ -258,7 +258,7 @@ impl IkdTree {
         }
         if n.is_leaf() {
             let leaf = &self.arena.leaves[n.a as usize];
-            let dead = if forced { 0 } else { leaf.dead };
+            let dead = if forced { 0 } else { n.b };
             for (i, p) in leaf.pts[..n.size as usize].iter().enumerate() {
                 if dead & (1 << i) == 0 && b.contains(p) {
                     out.push(*p);
@@ -302,7 +302,7 @@ impl IkdTree {
         if n.is_leaf() {
             let vs = self.params.voxel_size;
             let leaf = &self.arena.leaves[n.a as usize];
-            let dead = if forced { 0 } else { leaf.dead };
+            let dead = if forced { 0 } else { n.b };
             for &(sb, qi) in &scratch[lo..hi] {
                 if !sb.intersects(&n.bbox) {
                     continue;
