@@ -6,6 +6,7 @@
 
 use std::hint::black_box;
 use std::num::NonZeroUsize;
+use std::time::Duration;
 
 use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
 use kiddo::{ImmutableKdTree, MutableKdTree, SquaredEuclidean};
@@ -69,6 +70,8 @@ fn benches(c: &mut Criterion) {
 
     let mut g = c.benchmark_group("ikd_tree");
     g.sample_size(10);
+    g.warm_up_time(Duration::from_secs(1));
+    g.measurement_time(Duration::from_secs(3));
     g.bench_function("build_100k", |b| {
         b.iter(|| {
             let mut t = IkdTree::new(params).expect("valid params");
