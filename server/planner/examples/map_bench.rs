@@ -313,7 +313,8 @@ fn main() {
             "insert_scan_cpu_us": round(ikd_scan_cpu_us, 1), "delete_box_ms": round(ikd_delete_ms, 3),
             "knn5_ns": round(ikd_knn_ns, 1), "knn5_cpu_ns": round(ikd_knn_cpu_ns, 1),
             "nearest_distance_ns": round(ikd_nn1_ns, 1),
-            "bytes_per_point": round(ikd_bpp, 2), "bytes_per_point_after_updates": round(ikd_bpp_after, 2)}});
+            "bytes_per_point": round(ikd_bpp, 2), "bytes_per_point_after_updates": round(ikd_bpp_after, 2),
+            "rebuilds_in_place": ikd.stats().rebuilds_in_place, "rebuilds_background": ikd.stats().rebuilds_background}});
         println!("{out}");
         return;
     }
@@ -459,6 +460,8 @@ fn main() {
             "bytes_per_point_after_updates": round(ikd_bpp_after, 2),
             "delete_box_settled_ms": round(ikd_delete_settled_ms, 3),
             "scan_points_kept": kept,
+            "rebuilds_in_place": ikd.stats().rebuilds_in_place,
+            "rebuilds_background": ikd.stats().rebuilds_background,
             "deleted_points": deleted,
             "depth": ikd.depth(),
         },

@@ -3,9 +3,9 @@
 
 use std::thread::JoinHandle;
 
-use super::aabb::Point3;
+use super::aabb::{Aabb, Point3};
 use super::delete::Region;
-use super::node::{Arena, F_BG_ANC, F_BG_ROOT, NIL};
+use super::node::{Arena, F_BG_ANC, F_BG_ROOT, LEAF_CAP, NIL};
 use super::{IkdParams, IkdTree};
 
 /// Subtrees with fewer points than this are not checked for balance (a handful of leaves).
@@ -125,6 +125,30 @@ impl IkdTree {
     /// node keeps its slot. O(s log s) for s points.
     pub(crate) fn rebuild_with(&mut self, id: u32, extra: &[Point3]) {
         let n = self.arena.nodes[id as usize];
+        if n.is_leaf() && n.live() as usize + extra.len() <= LEAF_CAP {
+            // Still one bucket: compact it where it is (no allocation).
+            let leaf = &mut self.arena.leaves[n.a as usize];
+            let mut bbox = Aabb::empty();
+            let mut w = 0;
+            for i in 0..n.size as usize {
+                if n.b & (1 << i) == 0 {
+                    leaf.pts[w] = leaf.pts[i];
+                    bbox.expand(&leaf.pts[w]);
+                    w += 1;
+                }
+            }
+            for p in extra {
+                leaf.pts[w] = *p;
+                bbox.expand(p);
+                w += 1;
+            }
+            let node = &mut self.arena.nodes[id as usize];
+            node.size = w as u32;
+            node.invalid = 0;
+            node.b = 0;
+            node.bbox = bbox;
+            return;
+        }
         let mut pts = Vec::with_capacity(n.live() as usize + extra.len());
         self.arena.collect_live(id, false, &mut pts);
         pts.extend_from_slice(extra);
