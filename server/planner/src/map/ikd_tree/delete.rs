@@ -3,19 +3,15 @@
 use super::aabb::{Aabb, Point3};
 use super::node::{F_BG_ANC, F_BG_ROOT, NIL};
 use super::rebuild::LogOp;
-use super::{IkdTree, VoxelKey, voxel_key};
+use super::{IkdTree, VoxelShape};
 
 /// What a delete removes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum Region {
     /// Every valid point inside the closed box.
     Box(Aabb),
-    /// Every valid point of voxel `key` (of side `vs` metres); `search` bounds the voxel.
-    Voxel {
-        key: VoxelKey,
-        vs: f32,
-        search: Aabb,
-    },
+    /// Every valid point of a voxel (of side `vs` metres).
+    Voxel { shape: VoxelShape, vs: f32 },
     /// Every valid point with exactly these coordinates.
     Point(Point3),
 }
@@ -25,7 +21,7 @@ impl Region {
     pub(crate) fn matches(&self, p: &Point3) -> bool {
         match self {
             Region::Box(r) => r.contains(p),
-            Region::Voxel { key, vs, search } => search.contains(p) && voxel_key(p, *vs) == *key,
+            Region::Voxel { shape, vs } => shape.holds(p, *vs),
             Region::Point(q) => p == q,
         }
     }
@@ -35,7 +31,7 @@ impl Region {
     fn search_box(&self) -> Aabb {
         match self {
             Region::Box(r) => *r,
-            Region::Voxel { search, .. } => *search,
+            Region::Voxel { shape, .. } => shape.outer,
             Region::Point(p) => Aabb::new(*p, *p),
         }
     }

@@ -6,7 +6,7 @@ use super::delete::Region;
 use super::node::{F_BG_ROOT, LEAF_CAP, NIL};
 use super::rebuild::LogOp;
 use super::search::VoxQuery;
-use super::{IkdTree, VoxelKey, voxel_centre_dist2, voxel_key, voxel_search_box};
+use super::{IkdTree, VoxelKey, VoxelShape, voxel_centre_dist2, voxel_key};
 
 /// Offset that makes a voxel coordinate non-negative when packing three into a `u64` (21 bits each).
 const PACK_BIAS: i64 = 1 << 20;
@@ -108,12 +108,13 @@ impl IkdTree {
     /// the tree when the call returns.
     ///
     /// Without `downsample` every finite point is stored, duplicates included. With `downsample`, the
-    /// voxel rule of the [module documentation](self) applies: a point enters only when it is strictly
+    /// voxel rule of the [module documentation](crate::map::ikd_tree) applies: a point enters only when it is strictly
     /// nearer its voxel's centre than every valid point already in that voxel, and replaces them; of several
     /// points of the call in one voxel, the nearest to the centre (the first among equals) is the candidate.
     ///
-    /// Amortised O(m log n) for m points, plus O(m log m) for grouping voxels when down-sampling. May
-    /// rebuild the subtrees that the new points unbalance, or start a background rebuild.
+    /// Amortised O(m log n) for m points, in one walk down the tree; down-sampling adds O(m) hashing and
+    /// two more walks (voxel look-ups, deletes). May rebuild the subtrees that the new points unbalance or
+    /// dirty, or start a background rebuild.
     pub fn add_points(&mut self, points: &[Point3], downsample: bool) -> usize {
         self.poll_background(false);
         let pts: Vec<Point3> = points.iter().filter(|p| p.is_finite()).copied().collect();
@@ -138,22 +139,17 @@ impl IkdTree {
         let mut qs: Vec<VoxQuery> = cands
             .iter()
             .map(|&(key, _, _)| VoxQuery {
-                key,
-                sb: voxel_search_box(&key, vs),
+                shape: VoxelShape::new(key, vs),
                 best: f32::INFINITY,
             })
             .collect();
         self.voxel_best_multi(&mut qs);
         let mut winners = Vec::with_capacity(cands.len());
         let mut regions = Vec::new();
-        for (&(key, d2, idx), q) in cands.iter().zip(&qs) {
+        for (&(_, d2, idx), q) in cands.iter().zip(&qs) {
             if d2 < q.best {
                 if q.best.is_finite() {
-                    regions.push(Region::Voxel {
-                        key,
-                        vs,
-                        search: q.sb,
-                    });
+                    regions.push(Region::Voxel { shape: q.shape, vs });
                 }
                 winners.push(pts[idx as usize]);
             }

@@ -6,7 +6,7 @@
 //! | operation | cost |
 //! | --- | --- |
 //! | [`IkdTree::build`] | O(n log n), perfectly balanced |
-//! | [`IkdTree::add_points`] | amortised O(m log n), plus O(m log m) to group voxels when down-sampling |
+//! | [`IkdTree::add_points`] | amortised O(m log n); down-sampling adds O(m) hashing and two more walks |
 //! | [`IkdTree::delete_box`], [`IkdTree::restore_box`] | O(log n + boundary nodes); a subtree wholly inside the box is labelled in O(1) |
 //! | [`IkdTree::delete_points`] | O(m log n) expected |
 //! | [`IkdTree::nearest`], [`IkdTree::nearest_within`], [`IkdTree::nearest_distance`] | O(log n + k log k) expected |
@@ -39,7 +39,13 @@
 //!   runs on a named thread (`ikd-rebuild`) while the old subtree stays in place and keeps answering
 //!   queries. Writes that reach that subtree meanwhile are applied to it and appended to an operation
 //!   log; when the thread is done, the next write (or [`IkdTree::wait_rebuild`]) replays the log onto the
-//!   new subtree and swaps it in. Only one background rebuild runs at a time; others run in place.
+//!   new subtree and swaps it in. Only one background rebuild runs at a time; others run in place. The
+//!   writer still pays two O(size) copies (the points handed to the thread, the finished subtree moved
+//!   into the arena); the thread takes the O(size log size) sorting off it.
+//! - **Batches.** A call walks the tree once for all its points, not once per point: the batch is
+//!   partitioned in place at every node (inserts), or the boxes that can reach a node are carried down on
+//!   a stack (deletes, voxel look-ups). Down-sampling groups the batch by voxel with a hash table, looks up
+//!   every candidate voxel in one walk, deletes the voxels it wins in a second and inserts in a third.
 //! - **Memory.** Slots released by rebuilds go to free lists; once a third of the arena is free, the tree
 //!   is compacted (O(n), amortised over the frees), so deleting most of the map gives its memory back.
 //!
@@ -205,29 +211,67 @@ fn floor_i64(q: f64) -> i64 {
     }
 }
 
+/// Centre of voxel `key`, metres.
+#[inline]
+pub(crate) fn voxel_centre(key: &VoxelKey, vs: f32) -> Point3 {
+    let vs = vs as f64;
+    let c = |k: i64| ((k as f64 + 0.5) * vs) as f32;
+    Point3::new(c(key[0]), c(key[1]), c(key[2]))
+}
+
 /// Squared distance from `p` to the centre of voxel `key`, square metres.
 #[inline]
 pub(crate) fn voxel_centre_dist2(p: &Point3, key: &VoxelKey, vs: f32) -> f32 {
-    let vs = vs as f64;
-    let c = |k: i64| ((k as f64 + 0.5) * vs) as f32;
-    p.dist2(&Point3::new(c(key[0]), c(key[1]), c(key[2])))
+    p.dist2(&voxel_centre(key, vs))
 }
 
-/// A box, slightly larger than the voxel, that holds every `f32` point whose key is `key`.
-pub(crate) fn voxel_search_box(key: &VoxelKey, vs: f32) -> Aabb {
+/// The voxel's box grown (`grow = 1`) or shrunk (`grow = -1`) by a margin that covers `f32` rounding:
+/// the grown box holds every `f32` point whose key is `key`; every `f32` point inside the shrunk box has
+/// key `key`.
+fn voxel_box(key: &VoxelKey, vs: f32, grow: f64) -> Aabb {
     let vs = vs as f64;
     let lo = |k: i64| {
         let v = k as f64 * vs;
-        (v - (vs * 1e-3 + v.abs() * 1e-6)) as f32
+        (v - grow * (vs * 1e-3 + v.abs() * 1e-6)) as f32
     };
     let hi = |k: i64| {
         let v = (k as f64 + 1.0) * vs;
-        (v + (vs * 1e-3 + v.abs() * 1e-6)) as f32
+        (v + grow * (vs * 1e-3 + v.abs() * 1e-6)) as f32
     };
     Aabb::new(
         Point3::new(lo(key[0]), lo(key[1]), lo(key[2])),
         Point3::new(hi(key[0]), hi(key[1]), hi(key[2])),
     )
+}
+
+/// The three boxes and centre down-sampling needs to test membership of voxel `key` cheaply.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct VoxelShape {
+    /// The voxel.
+    pub key: VoxelKey,
+    /// Holds every point of the voxel (search bound).
+    pub outer: Aabb,
+    /// Every point inside is in the voxel (no division needed).
+    pub inner: Aabb,
+    /// The voxel's centre, metres.
+    pub centre: Point3,
+}
+
+impl VoxelShape {
+    pub(crate) fn new(key: VoxelKey, vs: f32) -> Self {
+        Self {
+            key,
+            outer: voxel_box(&key, vs, 1.0),
+            inner: voxel_box(&key, vs, -1.0),
+            centre: voxel_centre(&key, vs),
+        }
+    }
+
+    /// True when `p` lies in the voxel (exactly as `voxel_key(p) == key`).
+    #[inline(always)]
+    pub(crate) fn holds(&self, p: &Point3, vs: f32) -> bool {
+        self.inner.contains(p) || (self.outer.contains(p) && voxel_key(p, vs) == self.key)
+    }
 }
 
 impl IkdTree {

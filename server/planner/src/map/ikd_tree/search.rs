@@ -6,7 +6,7 @@ use std::collections::BinaryHeap;
 
 use super::aabb::{Aabb, Point3};
 use super::node::{F_RESTORE_ALL, NIL};
-use super::{IkdTree, voxel_centre_dist2, voxel_key};
+use super::{IkdTree, VoxelShape};
 
 /// Up to `k` best candidates so far, sorted ascending by squared distance (small `k`), or a max-heap.
 enum Best {
@@ -281,7 +281,7 @@ impl IkdTree {
         let mut scratch: Vec<(Aabb, u32)> = qs
             .iter()
             .enumerate()
-            .map(|(i, q)| (q.sb, i as u32))
+            .map(|(i, q)| (q.shape.outer, i as u32))
             .collect();
         self.voxel_multi_rec(self.root, 0, qs.len(), &mut scratch, qs, false);
     }
@@ -309,13 +309,10 @@ impl IkdTree {
                 }
                 let q = &mut qs[qi as usize];
                 for (j, p) in leaf.pts[..n.size as usize].iter().enumerate() {
-                    if dead & (1 << j) == 0 && sb.contains(p) {
-                        let k = voxel_key(p, vs);
-                        if k == q.key {
-                            let d2 = voxel_centre_dist2(p, &k, vs);
-                            if d2 < q.best {
-                                q.best = d2;
-                            }
+                    if dead & (1 << j) == 0 && q.shape.holds(p, vs) {
+                        let d2 = p.dist2(&q.shape.centre);
+                        if d2 < q.best {
+                            q.best = d2;
                         }
                     }
                 }
@@ -346,9 +343,7 @@ impl IkdTree {
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct VoxQuery {
     /// The voxel.
-    pub key: super::VoxelKey,
-    /// A box holding the voxel (see `voxel_search_box`).
-    pub sb: Aabb,
+    pub shape: VoxelShape,
     /// Answer: best squared distance to the voxel centre among its valid points, +inf when none.
     pub best: f32,
 }
