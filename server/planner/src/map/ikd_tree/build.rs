@@ -28,18 +28,21 @@ impl Arena {
         self.build_rec(pts, bbox)
     }
 
-    fn build_rec(&mut self, pts: &mut [Point3], bbox: Aabb) -> u32 {
+    /// `bounds` holds every point of `pts` (the exact box at the top, the parent's box cut at its split
+    /// below): it only chooses the split axis. Node boxes are exact: leaves measure their points and an
+    /// internal node takes the union of its children.
+    fn build_rec(&mut self, pts: &mut [Point3], bounds: Aabb) -> u32 {
         let n = pts.len();
         if n <= LEAF_CAP {
             let mut leaf = Leaf::EMPTY;
             leaf.pts[..n].copy_from_slice(pts);
             let slot = self.alloc_leaf(leaf);
-            return self.alloc_node(Node::leaf(slot, n as u32, bbox));
+            return self.alloc_node(Node::leaf(slot, n as u32, Aabb::of_points(pts)));
         }
         let ext = [
-            bbox.max.x - bbox.min.x,
-            bbox.max.y - bbox.min.y,
-            bbox.max.z - bbox.min.z,
+            bounds.max.x - bounds.min.x,
+            bounds.max.y - bounds.min.y,
+            bounds.max.z - bounds.min.z,
         ];
         let axis = if ext[0] >= ext[1] && ext[0] >= ext[2] {
             0
@@ -49,10 +52,15 @@ impl Arena {
             2
         };
         let mid = n / 2;
-        pts.select_nth_unstable_by(mid, |p, q| p.get(axis).total_cmp(&q.get(axis)));
+        // One comparator per axis, so that the axis is not re-dispatched on every comparison.
+        match axis {
+            0 => pts.select_nth_unstable_by(mid, |p, q| p.x.total_cmp(&q.x)),
+            1 => pts.select_nth_unstable_by(mid, |p, q| p.y.total_cmp(&q.y)),
+            _ => pts.select_nth_unstable_by(mid, |p, q| p.z.total_cmp(&q.z)),
+        };
         let split = pts[mid].get(axis);
         let id = self.alloc_node(Node {
-            bbox,
+            bbox: bounds,
             size: n as u32,
             invalid: 0,
             a: NIL,
@@ -63,12 +71,21 @@ impl Arena {
         });
         debug_assert!(self.nodes[id as usize].flags & F_LEAF == 0);
         let (lo, hi) = pts.split_at_mut(mid);
-        let (lb, hb) = (Aabb::of_points(lo), Aabb::of_points(hi));
+        let (mut lb, mut hb) = (bounds, bounds);
+        match axis {
+            0 => (lb.max.x, hb.min.x) = (split, split),
+            1 => (lb.max.y, hb.min.y) = (split, split),
+            _ => (lb.max.z, hb.min.z) = (split, split),
+        }
         let a = self.build_rec(lo, lb);
         let b = self.build_rec(hi, hb);
+        let bbox = self.nodes[a as usize]
+            .bbox
+            .union(&self.nodes[b as usize].bbox);
         let node = &mut self.nodes[id as usize];
         node.a = a;
         node.b = b;
+        node.bbox = bbox;
         id
     }
 }
