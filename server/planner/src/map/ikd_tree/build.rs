@@ -28,9 +28,9 @@ impl Arena {
         self.build_rec(pts, bbox)
     }
 
-    /// `bounds` holds every point of `pts` (the exact box at the top, the parent's box cut at its split
-    /// below): it only chooses the split axis. Node boxes are exact: leaves measure their points and an
-    /// internal node takes the union of its children.
+    /// `bounds` is the exact box of `pts`: it chooses the split axis (the widest), so that flat patches
+    /// (ground, walls) are never split across their thickness. Measuring it costs a pass per level, like
+    /// the selection itself.
     fn build_rec(&mut self, pts: &mut [Point3], bounds: Aabb) -> u32 {
         let n = pts.len();
         if n <= LEAF_CAP {
@@ -71,12 +71,7 @@ impl Arena {
         });
         debug_assert!(self.nodes[id as usize].flags & F_LEAF == 0);
         let (lo, hi) = pts.split_at_mut(mid);
-        let (mut lb, mut hb) = (bounds, bounds);
-        match axis {
-            0 => (lb.max.x, hb.min.x) = (split, split),
-            1 => (lb.max.y, hb.min.y) = (split, split),
-            _ => (lb.max.z, hb.min.z) = (split, split),
-        }
+        let (lb, hb) = (Aabb::of_points(lo), Aabb::of_points(hi));
         let a = self.build_rec(lo, lb);
         let b = self.build_rec(hi, hb);
         let bbox = self.nodes[a as usize]

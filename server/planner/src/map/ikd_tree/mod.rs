@@ -270,7 +270,8 @@ impl VoxelShape {
     /// True when `p` lies in the voxel (exactly as `voxel_key(p) == key`).
     #[inline(always)]
     pub(crate) fn holds(&self, p: &Point3, vs: f32) -> bool {
-        self.inner.contains(p) || (self.outer.contains(p) && voxel_key(p, vs) == self.key)
+        // Most points tested are outside the voxel: the outer box turns them away first.
+        self.outer.contains(p) && (self.inner.contains(p) || voxel_key(p, vs) == self.key)
     }
 }
 

@@ -552,3 +552,32 @@ fn is_send_and_sync() {
     fn check<T: Send + Sync>() {}
     check::<IkdTree>();
 }
+
+#[test]
+fn voxel_membership_matches_the_key() {
+    // The inner/outer box shortcut must agree with floor(c / voxel_size) everywhere, voxel faces included.
+    let mut rng = ChaCha8Rng::seed_from_u64(13);
+    for &vs in &[0.2f32, 0.07, 0.5, 1.0 / 3.0] {
+        for _ in 0..20_000 {
+            let scale = [1.0f32, 100.0, 10_000.0][rng.random_range(0..3)];
+            let mut c = || {
+                let k = rng.random_range(-50i32..50) as f32;
+                // On a face, a hair off it, or anywhere.
+                match rng.random_range(0..3) {
+                    0 => k * vs,
+                    1 => f32::from_bits((k * vs).to_bits().wrapping_add(rng.random_range(0..3))),
+                    _ => (rng.random::<f32>() - 0.5) * scale,
+                }
+            };
+            let p = Point3::new(c(), c(), c());
+            let q = Point3::new(c(), c(), c());
+            let shape = VoxelShape::new(voxel_key(&p, vs), vs);
+            assert!(shape.holds(&p, vs), "{p:?} not in its own voxel");
+            assert_eq!(
+                shape.holds(&q, vs),
+                voxel_key(&q, vs) == shape.key,
+                "{q:?} vs voxel of {p:?}"
+            );
+        }
+    }
+}
