@@ -129,6 +129,23 @@ impl Aabb {
             && p.z <= self.max.z
     }
 
+    /// Bit `i` set when `pts[i]` lies inside the box (at most the first 32 points), computed without
+    /// branches.
+    #[inline(always)]
+    pub(crate) fn inside_mask(&self, pts: &[Point3]) -> u32 {
+        let mut m = 0u32;
+        for (i, p) in pts.iter().take(32).enumerate() {
+            let inside = (p.x >= self.min.x)
+                & (p.x <= self.max.x)
+                & (p.y >= self.min.y)
+                & (p.y <= self.max.y)
+                & (p.z >= self.min.z)
+                & (p.z <= self.max.z);
+            m |= (inside as u32) << i;
+        }
+        m
+    }
+
     /// True when `other` lies wholly inside this box (an empty `other` is inside every box).
     #[inline(always)]
     pub fn contains_box(&self, other: &Aabb) -> bool {

@@ -17,15 +17,6 @@ pub(crate) enum Region {
 }
 
 impl Region {
-    #[inline]
-    pub(crate) fn matches(&self, p: &Point3) -> bool {
-        match self {
-            Region::Box(r) => r.contains(p),
-            Region::Voxel { shape, vs } => shape.holds(p, *vs),
-            Region::Point(q) => p == q,
-        }
-    }
-
     /// A box holding every point the region can match.
     #[inline]
     fn search_box(&self) -> Aabb {
@@ -164,13 +155,21 @@ impl IkdTree {
                 if !sb.intersects(&n.bbox) {
                     continue;
                 }
-                let region = &regions[r as usize];
-                for i in 0..n.size as usize {
-                    if dead & (1 << i) == 0 && region.matches(&leaf.pts[i]) {
-                        dead |= 1 << i;
-                        cnt += 1;
+                let pts = &leaf.pts[..n.size as usize];
+                let mut hit = sb.inside_mask(pts) & !dead;
+                if let Region::Voxel { shape, vs } = &regions[r as usize] {
+                    // The search box is a little larger than the voxel: check the candidates exactly.
+                    let mut m = hit;
+                    while m != 0 {
+                        let i = m.trailing_zeros();
+                        m &= m - 1;
+                        if !shape.holds(&pts[i as usize], *vs) {
+                            hit &= !(1 << i);
+                        }
                     }
                 }
+                dead |= hit;
+                cnt += hit.count_ones() as usize;
             }
             let node = &mut self.arena.nodes[id as usize];
             node.b = dead;
@@ -219,16 +218,10 @@ impl IkdTree {
         }
         if n.is_leaf() {
             let leaf = &self.arena.leaves[n.a as usize];
-            let mut dead = n.b;
-            let mut cnt = 0;
-            for i in 0..n.size as usize {
-                if dead & (1 << i) != 0 && b.contains(&leaf.pts[i]) {
-                    dead &= !(1 << i);
-                    cnt += 1;
-                }
-            }
+            let back = b.inside_mask(&leaf.pts[..n.size as usize]) & n.b;
+            let cnt = back.count_ones();
             let node = &mut self.arena.nodes[id as usize];
-            node.b = dead;
+            node.b &= !back;
             node.invalid -= cnt;
             return cnt as usize;
         }

@@ -308,8 +308,12 @@ impl IkdTree {
                     continue;
                 }
                 let q = &mut qs[qi as usize];
-                for (j, p) in leaf.pts[..n.size as usize].iter().enumerate() {
-                    if dead & (1 << j) == 0 && q.shape.holds(p, vs) {
+                let pts = &leaf.pts[..n.size as usize];
+                let mut m = sb.inside_mask(pts) & !dead;
+                while m != 0 {
+                    let p = &pts[m.trailing_zeros() as usize];
+                    m &= m - 1;
+                    if q.shape.holds(p, vs) {
                         let d2 = p.dist2(&q.shape.centre);
                         if d2 < q.best {
                             q.best = d2;
