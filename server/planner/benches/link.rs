@@ -127,6 +127,16 @@ fn benches(c: &mut Criterion) {
         });
         println!("median link {method} (fresh buffers): {fresh:.1} ms");
     }
+    // A short link (~10 m) with a fresh Linker: only the pages the search touches are faulted in.
+    let near = nearest_reachable(&space, Point2::new(110.0, 104.0));
+    let centre = nearest_reachable(&space, Point2::new(100.0, 100.0));
+    let params = LinkParams::default();
+    println!(
+        "median short link (~10 m, fresh buffers): {:.2} ms",
+        median_ms(5, || {
+            black_box(shift_planner::link::link(&space, centre, near, &params));
+        })
+    );
     println!(
         "median geodesic_matrix 500 points: {:.1} ms",
         median_ms(5, || {

@@ -167,28 +167,18 @@ impl Ord for Entry {
     }
 }
 
-/// The search state of one cell; kept together so that touching a cell touches one cache line.
-#[derive(Debug, Clone, Copy)]
-struct NodeState {
-    /// Best cost found so far (valid when `mark` is of this generation).
-    g: f64,
-    /// `2·generation` = seen in this search, `2·generation + 1` = closed in this search.
-    mark: u32,
-    /// Move that reached the cell (`ROOT` for roots).
-    parent: u8,
-}
-
-const FRESH: NodeState = NodeState {
-    g: 0.0,
-    mark: 0,
-    parent: ROOT,
-};
-
-/// Per-cell search state in one flat array, reused between searches: a generation stamp says which entries
-/// belong to the current search, so nothing is cleared between calls.
+/// Per-cell search state in one flat array of `(g, mark, parent)`, reused between searches:
+/// - `g`: best cost found so far (valid when `mark` is of this generation);
+/// - `mark`: `2·generation` = seen in this search, `2·generation + 1` = closed in this search;
+/// - `parent`: the move that reached the cell (`ROOT` for roots).
+///
+/// The three live together so that touching a cell touches one cache line, and the all-zero initial state
+/// lets a fresh array come from zeroed pages that are only faulted in where a search goes (a short link on a
+/// big map does not pay for the whole map). A generation stamp says which entries belong to the current
+/// search, so nothing is cleared between calls.
 #[derive(Debug, Default)]
 pub(crate) struct Frontier {
-    nodes: Vec<NodeState>,
+    nodes: Vec<(f64, u32, u8)>,
     pub(crate) heap: BinaryHeap<Entry>,
     generation: u32,
     /// Cells closed in this search.
@@ -199,11 +189,11 @@ impl Frontier {
     /// Starts a new search over `n` cells.
     pub(crate) fn reset(&mut self, n: usize) {
         if self.nodes.len() != n {
-            self.nodes = vec![FRESH; n];
+            self.nodes = vec![(0.0, 0, 0); n];
             self.generation = 0;
         }
         if self.generation >= u32::MAX / 2 - 1 {
-            self.nodes.fill(FRESH);
+            self.nodes.fill((0.0, 0, 0));
             self.generation = 0;
         }
         self.generation += 1;
@@ -214,17 +204,13 @@ impl Frontier {
     /// Cost so far of cell `i` (infinite when not seen in this search).
     #[inline]
     pub(crate) fn g(&self, i: usize) -> f64 {
-        let n = &self.nodes[i];
-        if n.mark >> 1 == self.generation {
-            n.g
-        } else {
-            f64::INFINITY
-        }
+        let (g, mark, _) = self.nodes[i];
+        if mark >> 1 == self.generation { g } else { f64::INFINITY }
     }
 
     #[inline]
     pub(crate) fn is_closed(&self, i: usize) -> bool {
-        self.nodes[i].mark == 2 * self.generation + 1
+        self.nodes[i].1 == 2 * self.generation + 1
     }
 
     /// Records cost `g` for cell `i`, reached by move `parent`.
@@ -232,22 +218,22 @@ impl Frontier {
     pub(crate) fn set(&mut self, i: usize, g: f64, parent: u8) {
         let generation = self.generation;
         let n = &mut self.nodes[i];
-        n.g = g;
-        n.parent = parent;
-        if n.mark >> 1 != generation {
-            n.mark = 2 * generation;
+        n.0 = g;
+        n.2 = parent;
+        if n.1 >> 1 != generation {
+            n.1 = 2 * generation;
         }
     }
 
     #[inline]
     pub(crate) fn close(&mut self, i: usize) {
-        self.nodes[i].mark = 2 * self.generation + 1;
+        self.nodes[i].1 = 2 * self.generation + 1;
         self.expanded += 1;
     }
 
     #[inline]
     pub(crate) fn parent(&self, i: usize) -> u8 {
-        self.nodes[i].parent
+        self.nodes[i].2
     }
 
     /// Drops closed entries from the top of the heap and returns the smallest key left (∞ when empty).

@@ -93,6 +93,8 @@ struct Portal {
     cells: [u32; 2],
     /// Length of the move between the two cells, metres.
     step_m: f64,
+    /// Walk from each point to the middle of the crossing: its cell's distance plus half the step, metres.
+    reach_m: [f64; 2],
 }
 
 /// Multi-source Dijkstra over the grid from the points' cells (bucket queue, exact; see the module docs).
@@ -444,10 +446,12 @@ pub fn geodesic_matrix(space: &CoverageSpace, points: &[Point2]) -> Vec<f64> {
             let step_m = STEP_CELLS[d] * res;
             let w = cells[u].dist + step_m + cells[v].dist;
             let (site_u, site_v) = (lu as usize, lv as usize);
+            let half = 0.5 * step_m;
             let portal = Portal {
                 sites: [lu, lv],
                 cells: [u as u32, v as u32],
                 step_m,
+                reach_m: [cells[u].dist + half, cells[v].dist + half],
             };
             match of_site[site_u].iter().find(|e| e.0 == lv) {
                 Some(&(_, id)) => {
@@ -463,6 +467,7 @@ pub fn geodesic_matrix(space: &CoverageSpace, points: &[Point2]) -> Vec<f64> {
                                 sites: [lv, lu],
                                 cells: [v as u32, u as u32],
                                 step_m,
+                                reach_m: [portal.reach_m[1], portal.reach_m[0]],
                             }
                         };
                     }
@@ -528,7 +533,7 @@ pub fn geodesic_matrix(space: &CoverageSpace, points: &[Point2]) -> Vec<f64> {
         let src_label = src as u32;
         for &(_, p) in &of_site[src] {
             let pp = &portals[p as usize];
-            queue.relax(p, cells[pp.cells[side(pp, src_label)] as usize].dist + 0.5 * pp.step_m);
+            queue.relax(p, pp.reach_m[side(pp, src_label)]);
         }
         while let Some((u, du)) = queue.pop() {
             let u = u as usize;
@@ -540,10 +545,9 @@ pub fn geodesic_matrix(space: &CoverageSpace, points: &[Point2]) -> Vec<f64> {
         for &p in queue.touched() {
             let pp = &portals[p as usize];
             let dp = queue.dist(p);
-            for k in 0..2 {
-                let site = pp.sites[k] as usize;
-                let d = dp + 0.5 * pp.step_m + cells[pp.cells[k] as usize].dist;
-                row[site] = row[site].min(d);
+            for (site, reach) in pp.sites.iter().zip(pp.reach_m) {
+                let site = *site as usize;
+                row[site] = row[site].min(dp + reach);
             }
         }
         row[src] = 0.0;

@@ -190,13 +190,8 @@ impl<'s> Linker<'s> {
     /// [`LinkParams::sanitized`]).
     pub fn new(space: &'s CoverageSpace, params: &LinkParams) -> Self {
         let params = params.sanitized();
-        let max_clearance = space
-            .reachable
-            .iter()
-            .enumerate()
-            .filter(|&(_, &r)| r)
-            .map(|(i, _)| space.clearance.at(i))
-            .fold(0.0_f64, f64::max);
+        // The largest clearance anywhere bounds the reachable cells' from above (so the multiplier from below).
+        let max_clearance = f64::from(space.clearance.values().iter().copied().fold(0.0_f32, f32::max));
         let min_multiplier = if max_clearance.is_finite() {
             1.0 + params.alpha / (max_clearance * (1.0 + 1e-6) + params.epsilon_m)
         } else {
