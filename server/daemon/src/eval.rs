@@ -87,8 +87,13 @@ pub fn run_eval(root: &Path, render: Option<&Path>, mut on_row: impl FnMut(&Eval
             Ok(())
         };
         let mut default_len = 0.0;
-        for d in DecompositionMethod::ALL {
-            for o in OrderMethod::ALL {
+        for d in std::iter::once(DecompositionMethod::Auto).chain(DecompositionMethod::ALL) {
+            let orders: &[OrderMethod] = if d == DecompositionMethod::Auto {
+                &[OrderMethod::TwoOpt]
+            } else {
+                &OrderMethod::ALL
+            };
+            for &o in orders {
                 let params = PlanParams {
                     decomposition: d,
                     order: o,

@@ -49,8 +49,8 @@ struct PlanArgs {
     /// Tool width, metres.
     #[arg(long)]
     tool_width: Option<f64>,
-    /// Decomposition: bcd, walls, voronoi, grid.
-    #[arg(long, default_value = "bcd")]
+    /// Decomposition: auto (the shorter of bcd and walls), bcd, walls, voronoi, grid.
+    #[arg(long, default_value = "auto")]
     decomposition: DecompositionMethod,
     /// Visiting order solver: two-opt, rrt, anneal.
     #[arg(long, default_value = "two-opt")]

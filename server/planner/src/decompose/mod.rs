@@ -75,8 +75,11 @@ pub trait Decomposer {
 /// The decompositions the planner offers.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
 pub enum DecompositionMethod {
-    /// Boustrophedon cellular decomposition (Choset): cells split at the sweep line's critical points.
+    /// Plan with boustrophedon cells and with wall division and keep the shorter plan (the default: neither
+    /// wins on every kind of map — rooms and round obstacles favour walls, racks and aisles favour cells).
     #[default]
+    Auto,
+    /// Boustrophedon cellular decomposition (Choset): cells split at the sweep line's critical points.
     Bcd,
     /// Sub-area division along walls (seed 003, Alg. 1).
     Walls,
@@ -100,6 +103,7 @@ impl DecompositionMethod {
             Self::Voronoi => "voronoi",
             Self::Grid => "grid",
             Self::Single => "none",
+            Self::Auto => "auto",
         }
     }
 
@@ -111,6 +115,7 @@ impl DecompositionMethod {
             Self::Voronoi => &voronoi::GeodesicVoronoi,
             Self::Grid => &grid::GridBlocks,
             Self::Single => &Single,
+            Self::Auto => &bcd::Boustrophedon,
         }
     }
 }
@@ -120,9 +125,11 @@ impl std::str::FromStr for DecompositionMethod {
     fn from_str(s: &str) -> Result<Self, String> {
         Self::ALL
             .into_iter()
-            .chain([Self::Single])
+            .chain([Self::Single, Self::Auto])
             .find(|m| m.name() == s)
-            .ok_or_else(|| format!("unknown decomposition {s:?}; expected one of bcd, walls, voronoi, grid, none"))
+            .ok_or_else(|| {
+                format!("unknown decomposition {s:?}; expected one of auto, bcd, walls, voronoi, grid, none")
+            })
     }
 }
 

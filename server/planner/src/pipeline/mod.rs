@@ -46,7 +46,7 @@ pub struct PlanParams {
 impl Default for PlanParams {
     fn default() -> Self {
         Self {
-            decomposition: DecompositionMethod::Bcd,
+            decomposition: DecompositionMethod::Auto,
             order: OrderMethod::TwoOpt,
             pattern: PatternMethod::Lanes,
             seed: 1,
@@ -184,6 +184,27 @@ impl PlanOutput {
 /// the map-wide lane lattice and with per-region fitted lanes (see [`Placement`]) and keeps the shorter plan
 /// of the two that meet the coverage target (the lattice wins ties).
 pub fn plan(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanMonitor) -> Result<PlanOutput> {
+    if params.decomposition == DecompositionMethod::Auto {
+        let mut best: Option<PlanOutput> = None;
+        for d in [DecompositionMethod::Bcd, DecompositionMethod::Walls] {
+            let out = plan(
+                space,
+                &PlanParams {
+                    decomposition: d,
+                    ..params.clone()
+                },
+                monitor,
+            )?;
+            let better = best.as_ref().is_none_or(|b| {
+                let ok = |o: &PlanOutput| o.metrics.collisions == 0 && o.metrics.coverage_pct >= 99.0;
+                (ok(&out), -out.metrics.length_m) > (ok(b), -b.metrics.length_m)
+            });
+            if better {
+                best = Some(out);
+            }
+        }
+        return best.ok_or(PlannerError::Cancelled);
+    }
     if params.lanes.placement.is_some() || params.pattern != PatternMethod::Lanes {
         return plan_once(space, params, monitor);
     }
