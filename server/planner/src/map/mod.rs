@@ -4,10 +4,12 @@ pub mod distance;
 pub mod grid;
 pub mod ikd_tree;
 pub mod json_grid;
+pub mod obstacle;
 pub mod ros;
 
 pub use distance::DistanceField;
 pub use grid::{Cell, CellState, GridGeometry, OccupancyGrid, Thresholds};
 pub use ikd_tree::{IkdParams, IkdTree};
 pub use json_grid::JsonGrid;
+pub use obstacle::ObstacleDistance;
 pub use ros::{LoadedMap, MapMode, MapYaml, load_ros_map};
