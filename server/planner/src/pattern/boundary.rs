@@ -13,7 +13,7 @@
 //! coverage target is met. A plan thus covers the edges wherever that is cheap, and spends extra driving on
 //! the last fractions of a percent only as far as the target asks.
 
-use super::contour::trace_loops;
+use super::contour::trace_cells;
 use super::lanes::RegionView;
 use super::{Task, TaskKind};
 use crate::geom::{Point2, simplify_polyline};
@@ -69,10 +69,6 @@ pub fn candidates(
         return Vec::new();
     }
     let mut out = Vec::new();
-    let mut mask = vec![false; g.len()];
-    for &i in region.cells {
-        mask[i] = true;
-    }
     let rc = (half / res).ceil() as isize;
     // Uncovered targets within reach of a contour vertex.
     let reach_of = |i: usize, f: &mut dyn FnMut(usize)| {
@@ -89,11 +85,11 @@ pub fn candidates(
             }
         }
     };
-    let mut reached = vec![false; g.len()];
+    let mut reached = std::collections::HashSet::new();
     let extend = rc.max(1) as usize;
     let merge_gap = (2 * rc).max(2) as usize;
     let max_len = ((params.max_stretch_widths * 2.0 * half) / res).ceil().max(4.0) as usize;
-    for lp in trace_loops(&g, &mask) {
+    for lp in trace_cells(&g, region.cells) {
         let n = lp.len();
         if n < 2 {
             continue;
@@ -104,7 +100,7 @@ pub fn candidates(
                 let mut any = false;
                 reach_of(i, &mut |j| {
                     any = true;
-                    reached[j] = true;
+                    reached.insert(j);
                 });
                 any
             })
@@ -136,7 +132,7 @@ pub fn candidates(
         }
     }
     for &t in region.targets {
-        if !need(t) || reached[t] {
+        if !need(t) || reached.contains(&t) {
             continue;
         }
         let Some(r) = nearest_reachable.nearest_site_index(t) else {

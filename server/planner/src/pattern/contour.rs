@@ -9,6 +9,32 @@ use crate::map::{Cell, GridGeometry};
 /// Clockwise Moore neighbourhood, starting west.
 const RING: [(isize, isize); 8] = [(-1, 0), (-1, 1), (0, 1), (1, 1), (1, 0), (1, -1), (0, -1), (-1, -1)];
 
+/// Traces the boundary loops of the cells `cells` (global indices) on their bounding box only, so tracing
+/// one region costs O(region), not O(map). Returns global indices.
+pub fn trace_cells(g: &GridGeometry, cells: &[usize]) -> Vec<Vec<usize>> {
+    let (mut x0, mut y0, mut x1, mut y1) = (usize::MAX, usize::MAX, 0, 0);
+    for &i in cells {
+        let c = g.cell(i);
+        (x0, y0, x1, y1) = (x0.min(c.x), y0.min(c.y), x1.max(c.x), y1.max(c.y));
+    }
+    if x0 == usize::MAX {
+        return Vec::new();
+    }
+    let (bw, bh) = (x1 - x0 + 1, y1 - y0 + 1);
+    let Ok(local) = GridGeometry::new(bw, bh, g.resolution, g.origin) else {
+        return Vec::new();
+    };
+    let mut mask = vec![false; bw * bh];
+    for &i in cells {
+        let c = g.cell(i);
+        mask[(c.y - y0) * bw + (c.x - x0)] = true;
+    }
+    trace_loops(&local, &mask)
+        .into_iter()
+        .map(|lp| lp.into_iter().map(|j| (y0 + j / bw) * g.width + x0 + j % bw).collect())
+        .collect()
+}
+
 /// Traces all boundary loops of `mask`.
 pub fn trace_loops(g: &GridGeometry, mask: &[bool]) -> Vec<Vec<usize>> {
     let inside = |c: Option<Cell>| c.is_some_and(|c| mask[g.index(c)]);

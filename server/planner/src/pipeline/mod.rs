@@ -3,15 +3,15 @@
 
 pub mod route;
 
-use crate::decompose::{DecomposeParams, DecompositionMethod, NO_REGION, Regions, decompose};
+use crate::decompose::{DecomposeParams, DecompositionMethod, NO_REGION, decompose};
 use crate::error::{PlannerError, Result};
 use crate::geom::{Point2, simplify_polyline};
-use crate::link::{LinkParams, geodesic_matrix, link};
+use crate::link::{LinkParams, Linker, geodesic_matrix};
 use crate::map::DistanceField;
 use crate::metrics::{CoverageRaster, PlanMetrics, evaluate};
 use crate::order::{DistanceMatrix, OrderMethod, SolveBudget, TourOption, TourProblem};
 use crate::pattern::boundary::{PassParams, candidates, select};
-use crate::pattern::contour::trace_loops;
+use crate::pattern::contour::trace_cells;
 use crate::pattern::lanes::{LaneParams, Placement, RegionView, plan_lanes};
 use crate::pattern::spiral::plan_rings;
 use crate::pattern::{PatternMethod, Task};
@@ -373,25 +373,26 @@ fn plan_once(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanM
 
     // Assemble: dock → region routes with links → dock.
     let mut path = Path::new(space.start);
+    let mut linker = Linker::new(space, &params.link);
     let mut summaries = Vec::with_capacity(active.len());
     for (&k, &o) in tour.order.iter().zip(&tour.options) {
         let id = active[k];
         let route = &options[id][o];
-        if !path.transit_to(space, route.entry, &params.link, &mut warnings) {
+        if !path.transit_to(space, route.entry, &mut linker, &mut warnings) {
             continue;
         }
         for leg in &route.legs {
             let pts = leg.points(&tasks[id]);
-            if path.cover_to(space, pts[0], id as u32, &params.link, &mut warnings) {
+            if path.cover_to(space, pts[0], id as u32, &mut linker, &mut warnings) {
                 for &p in &pts[1..] {
                     path.push(p, WaypointKind::Cover, Some(id as u32));
                 }
             }
         }
-        summaries.push(summary(space, &regions, id, angles[id]));
+        summaries.push(summary(space, &cells[id], id, angles[id]));
         check(monitor)?;
     }
-    path.transit_to(space, space.start, &params.link, &mut warnings);
+    path.transit_to(space, space.start, &mut linker, &mut warnings);
     let waypoints = path.waypoints;
     let pts: Vec<Point2> = waypoints.iter().map(|w| w.position).collect();
     let metrics = evaluate(space, &pts);
@@ -462,10 +463,10 @@ impl Path {
         &mut self,
         space: &CoverageSpace,
         to: Point2,
-        params: &LinkParams,
+        linker: &mut Linker<'_>,
         warnings: &mut Vec<String>,
     ) -> bool {
-        self.connect(space, to, WaypointKind::Transit, None, params, warnings)
+        self.connect(space, to, WaypointKind::Transit, None, linker, warnings)
     }
 
     /// Moves to `to` inside region `id`: straight when clear, else linked; false when no link exists.
@@ -474,10 +475,10 @@ impl Path {
         space: &CoverageSpace,
         to: Point2,
         id: u32,
-        params: &LinkParams,
+        linker: &mut Linker<'_>,
         warnings: &mut Vec<String>,
     ) -> bool {
-        self.connect(space, to, WaypointKind::Cover, Some(id), params, warnings)
+        self.connect(space, to, WaypointKind::Cover, Some(id), linker, warnings)
     }
 
     fn connect(
@@ -486,7 +487,7 @@ impl Path {
         to: Point2,
         kind: WaypointKind,
         region: Option<u32>,
-        params: &LinkParams,
+        linker: &mut Linker<'_>,
         warnings: &mut Vec<String>,
     ) -> bool {
         let from = self.last();
@@ -497,7 +498,7 @@ impl Path {
             self.push(to, kind, region);
             return true;
         }
-        match link(space, from, to, params) {
+        match linker.link(from, to) {
             Some(pts) => {
                 for p in pts.into_iter().skip(1) {
                     self.push(p, kind, region);
@@ -515,11 +516,10 @@ impl Path {
     }
 }
 
-fn summary(space: &CoverageSpace, regions: &Regions, id: usize, angle: f64) -> RegionSummary {
+fn summary(space: &CoverageSpace, cells: &[usize], id: usize, angle: f64) -> RegionSummary {
     let g = space.geometry();
-    let mask: Vec<bool> = regions.labels.iter().map(|&l| l == id as u32).collect();
-    let area_m2 = mask.iter().filter(|&&m| m).count() as f64 * g.resolution * g.resolution;
-    let outer = trace_loops(g, &mask).into_iter().next().unwrap_or_default();
+    let area_m2 = cells.len() as f64 * g.resolution * g.resolution;
+    let outer = trace_cells(g, cells).into_iter().next().unwrap_or_default();
     let pts: Vec<Point2> = outer.iter().map(|&i| g.center_of(i)).collect();
     let polygon = simplify_polyline(&pts, g.resolution, &|_, _| true);
     RegionSummary {

@@ -199,15 +199,26 @@ fn route_sweep(tasks: &[Task], angle: f64, entry: Point2) -> RegionRoute {
         });
         at = if reversed { a } else { b };
     }
+    // Cheapest insertion of every other task: the cost change of putting leg L between p (the previous
+    // leg's end, or the entry) and q (the next leg's start, if any) is |p L.start| + |L.end q| − |p q|.
     for k in (0..tasks.len()).filter(|&k| tasks[k].kind != crate::pattern::TaskKind::Lane) {
+        let ends: Vec<(Point2, Point2)> = legs
+            .iter()
+            .map(|l| {
+                let pts = l.points(tasks);
+                (pts[0], pts[pts.len() - 1])
+            })
+            .collect();
         let mut best: Option<(f64, usize, Leg)> = None;
-        for (_, _, leg) in task_options(tasks, k) {
+        for (a, b, leg) in task_options(tasks, k) {
             for pos in 0..=legs.len() {
-                legs.insert(pos, leg);
-                let c = legs_cost(tasks, entry, &legs);
-                legs.remove(pos);
-                if best.is_none_or(|(bc, _, _)| c < bc) {
-                    best = Some((c, pos, leg));
+                let p = if pos == 0 { entry } else { ends[pos - 1].1 };
+                let delta = match ends.get(pos) {
+                    Some(&(q, _)) => (a - p).norm() + (q - b).norm() - (q - p).norm(),
+                    None => (a - p).norm(),
+                };
+                if best.is_none_or(|(bd, _, _)| delta < bd) {
+                    best = Some((delta, pos, leg));
                 }
             }
         }

@@ -1,0 +1,44 @@
+//! Times each stage of a default plan on generated cluttered sites of growing size:
+//! `cargo run --release -p shift-planner --example plan_timing -- [SIDE_M ...]`.
+
+use std::time::Instant;
+
+use shift_planner::geom::Point2;
+use shift_planner::pipeline::{NoMonitor, PlanParams, plan};
+use shift_planner::space::{CoverageSpace, RobotShape};
+use shift_planner::testing::cluttered_site;
+
+fn main() {
+    let sides: Vec<f64> = std::env::args().skip(1).filter_map(|a| a.parse().ok()).collect();
+    let sides = if sides.is_empty() {
+        vec![25.0, 50.0, 100.0]
+    } else {
+        sides
+    };
+    for side in sides {
+        let grid = cluttered_site(side, side, 0.1, (side * side / 100.0) as usize, 7).expect("site");
+        let t = Instant::now();
+        let space = CoverageSpace::new(
+            grid,
+            RobotShape {
+                radius_m: 0.3,
+                tool_width_m: 0.6,
+            },
+            Point2::new(1.0, 1.0),
+        )
+        .expect("space");
+        let space_ms = t.elapsed().as_secs_f64() * 1e3;
+        let t = Instant::now();
+        let out = plan(&space, &PlanParams::default(), &mut NoMonitor).expect("plan");
+        let plan_ms = t.elapsed().as_secs_f64() * 1e3;
+        let m = out.metrics;
+        println!(
+            "{{\"side_m\": {side}, \"cells\": {}, \"space_ms\": {space_ms:.0}, \"plan_ms\": {plan_ms:.0}, \"regions\": {}, \"coverage_pct\": {:.2}, \"overlap_pct\": {:.2}, \"collisions\": {}}}",
+            space.geometry().len(),
+            out.regions.len(),
+            m.coverage_pct,
+            m.overlap_pct,
+            m.collisions
+        );
+    }
+}
