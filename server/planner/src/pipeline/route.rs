@@ -144,6 +144,9 @@ pub fn route_from(
     }
 }
 
+/// Regions with more tasks than this are routed by the sweep order alone.
+pub const MAX_SEARCH_TASKS: usize = 400;
+
 /// Cost of driving `legs` from `entry`: task lengths plus straight connections.
 fn legs_cost(tasks: &[Task], entry: Point2, legs: &[Leg]) -> f64 {
     let mut at = entry;
