@@ -49,7 +49,7 @@ struct PlanArgs {
     /// Tool width, metres.
     #[arg(long)]
     tool_width: Option<f64>,
-    /// Decomposition: auto (the shorter of bcd and walls), bcd, walls, voronoi, grid.
+    /// Decomposition: auto (the shortest of bcd, walls and one undivided spiral), bcd, walls, voronoi, grid, none.
     #[arg(long, default_value = "auto")]
     decomposition: DecompositionMethod,
     /// Visiting order solver: two-opt, rrt, anneal.

@@ -75,8 +75,10 @@ pub trait Decomposer {
 /// The decompositions the planner offers.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
 pub enum DecompositionMethod {
-    /// Plan with boustrophedon cells and with wall division and keep the shorter plan (the default: neither
-    /// wins on every kind of map — rooms and round obstacles favour walls, racks and aisles favour cells).
+    /// The default: plan with boustrophedon cells and with wall division (in the requested pattern), and with
+    /// one spiral over the undivided space, and keep the shortest plan that meets the coverage bar. No single
+    /// strategy wins on every kind of map: rooms favour the contour-following spiral, racks and aisles the
+    /// cells, open ground with round obstacles the wall division.
     #[default]
     Auto,
     /// Boustrophedon cellular decomposition (Choset): cells split at the sweep line's critical points.

@@ -45,7 +45,7 @@ pub struct PassParams {
 impl Default for PassParams {
     fn default() -> Self {
         Self {
-            coverage_target_pct: 99.7,
+            coverage_target_pct: 99.4,
             min_yield: 0.25,
             max_stretch_widths: 8.0,
         }

@@ -186,11 +186,17 @@ impl PlanOutput {
 pub fn plan(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanMonitor) -> Result<PlanOutput> {
     if params.decomposition == DecompositionMethod::Auto {
         let mut best: Option<PlanOutput> = None;
-        for d in [DecompositionMethod::Bcd, DecompositionMethod::Walls] {
+        let portfolio = [
+            (DecompositionMethod::Bcd, params.pattern),
+            (DecompositionMethod::Walls, params.pattern),
+            (DecompositionMethod::Single, PatternMethod::Spiral),
+        ];
+        for (d, pattern) in portfolio {
             let out = plan(
                 space,
                 &PlanParams {
                     decomposition: d,
+                    pattern,
                     ..params.clone()
                 },
                 monitor,
