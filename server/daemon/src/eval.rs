@@ -105,7 +105,13 @@ pub fn run_eval(root: &Path, render: Option<&Path>, mut on_row: impl FnMut(&Eval
                 if d == DecompositionMethod::default() && o == OrderMethod::default() {
                     default_len = out.metrics.length_m;
                 }
-                emit(d.name(), o.name(), params.pattern.name(), &out, ms)?;
+                // For `auto`, say which member won.
+                let dname = if d == DecompositionMethod::Auto {
+                    format!("auto:{}", out.decomposition.name())
+                } else {
+                    d.name().to_owned()
+                };
+                emit(&dname, o.name(), out.pattern.name(), &out, ms)?;
             }
         }
         for b in Baseline::ALL {

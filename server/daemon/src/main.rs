@@ -162,14 +162,16 @@ fn cmd_plan(args: PlanArgs) -> Result<()> {
     }
     let m = out.metrics;
     eprintln!(
-        "coverage {:.2} %  overlap {:.2} %  length {:.1} m  turns {}  collisions {}  regions {}  compute {:.0} ms",
+        "coverage {:.2} %  overlap {:.2} %  length {:.1} m  turns {}  collisions {}  regions {}  compute {:.0} ms  ({} + {})",
         m.coverage_pct,
         m.overlap_pct,
         m.length_m,
         m.turns,
         m.collisions,
         out.regions.len(),
-        ms
+        ms,
+        out.decomposition.name(),
+        out.pattern.name()
     );
     let st = out.stats;
     eprintln!(

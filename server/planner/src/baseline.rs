@@ -109,5 +109,7 @@ pub fn random_walk(space: &CoverageSpace, seed: u64, length_budget_m: f64) -> Pl
             ..PlanStats::default()
         },
         warnings: Vec::new(),
+        decomposition: DecompositionMethod::Single,
+        pattern: PatternMethod::Lanes,
     }
 }

@@ -169,6 +169,10 @@ pub struct PlanOutput {
     pub metrics: PlanMetrics,
     /// Where the length goes.
     pub stats: PlanStats,
+    /// The decomposition that produced this plan (what `auto` chose).
+    pub decomposition: DecompositionMethod,
+    /// The pattern that produced this plan.
+    pub pattern: PatternMethod,
     /// Remarks for the user.
     pub warnings: Vec<String>,
 }
@@ -411,6 +415,8 @@ fn plan_once(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanM
         metrics,
         stats,
         warnings,
+        decomposition: params.decomposition,
+        pattern: params.pattern,
     })
 }
 
