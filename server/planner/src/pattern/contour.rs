@@ -37,18 +37,32 @@ pub fn trace_cells(g: &GridGeometry, cells: &[usize]) -> Vec<Vec<usize>> {
 
 /// Traces all boundary loops of `mask`.
 pub fn trace_loops(g: &GridGeometry, mask: &[bool]) -> Vec<Vec<usize>> {
-    let inside = |c: Option<Cell>| c.is_some_and(|c| mask[g.index(c)]);
+    let mut visited = vec![0u32; g.len()];
+    trace_from(g, &|i| mask[i], 0..g.len(), &mut visited, 1)
+}
+
+/// Traces the boundary loops of the mask `inside` that pass through the candidate start cells `starts` (every
+/// boundary cell of a loop to be found must be among them or reached from them). `visited` is scratch of the
+/// grid's size, marked with `stamp`; reusing it with a fresh stamp per call makes repeated tracing (one call per
+/// spiral ring) cost O(boundary), not O(map).
+pub fn trace_from(
+    g: &GridGeometry,
+    mask: &dyn Fn(usize) -> bool,
+    starts: impl IntoIterator<Item = usize>,
+    visited: &mut [u32],
+    stamp: u32,
+) -> Vec<Vec<usize>> {
+    let inside = |c: Option<Cell>| c.is_some_and(|c| mask(g.index(c)));
     let is_boundary = |i: usize| {
         let c = g.cell(i);
-        mask[i]
+        mask(i)
             && [(0, 1), (0, -1), (1, 0), (-1, 0)]
                 .iter()
                 .any(|&(dx, dy)| !inside(g.offset(c, dx, dy)))
     };
-    let mut visited = vec![false; g.len()];
     let mut loops = Vec::new();
-    for s in 0..g.len() {
-        if visited[s] || !is_boundary(s) {
+    for s in starts {
+        if visited[s] == stamp || !is_boundary(s) {
             continue;
         }
         let start = g.cell(s);
@@ -60,10 +74,10 @@ pub fn trace_loops(g: &GridGeometry, mask: &[bool]) -> Vec<Vec<usize>> {
             continue;
         };
         let mut out = vec![s];
-        visited[s] = true;
+        visited[s] = stamp;
         let (mut cur, mut back) = (start, b0);
         let mut first_move: Option<(Cell, usize)> = None;
-        let cap = 4 * mask.len() + 8;
+        let cap = 4 * g.len() + 8;
         for _ in 0..cap {
             // Scan clockwise from the backtrack direction for the next mask cell.
             let mut found = None;
@@ -92,7 +106,7 @@ pub fn trace_loops(g: &GridGeometry, mask: &[bool]) -> Vec<Vec<usize>> {
             back = RING.iter().position(|&d| d == (dx, dy)).unwrap_or((dir + 4) % 8);
             cur = next;
             let i = g.index(cur);
-            visited[i] = true;
+            visited[i] = stamp;
             out.push(i);
         }
         // Drop the closing repeat of the start.

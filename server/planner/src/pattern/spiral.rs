@@ -4,7 +4,7 @@
 //! (distance transform on the region's bounding box). Each ring is a closed task; the ordering stage picks
 //! where each ring is entered and in which direction, which yields the inward spiral.
 
-use super::contour::trace_loops;
+use super::contour::trace_from;
 use super::lanes::RegionView;
 use super::{Task, TaskKind};
 use crate::geom::{Point2, simplify_polyline};
@@ -36,14 +36,45 @@ pub fn plan_rings(space: &CoverageSpace, region: RegionView<'_>) -> Vec<Task> {
     let global = |j: usize| (y0 + j / bw) * g.width + x0 + j % bw;
     let inside: Vec<bool> = (0..sub.len()).map(|j| region.labels[global(j)] == region.id).collect();
     let depth = DistanceField::compute(sub, |j| !inside[j], true);
-    let mut tasks = Vec::new();
-    for k in 0.. {
-        let level = res + k as f64 * w - 1e-9;
-        let mask: Vec<bool> = (0..sub.len()).map(|j| inside[j] && depth.at(j) >= level).collect();
-        if !mask.iter().any(|&m| m) {
-            break;
+    // Level k holds the cells at least `res + k·w` deep. A cell lies on the boundary of level k when it is in
+    // it and a 4-neighbour (or the outside) is not: bucket every cell under the levels it bounds, in one pass,
+    // so tracing all rings costs O(region) rather than O(levels × region).
+    let level_of = |k: usize| res + k as f64 * w - 1e-9;
+    let mut buckets: Vec<Vec<usize>> = Vec::new();
+    for j in (0..sub.len()).filter(|&j| inside[j]) {
+        let d = depth.at(j);
+        let c = sub.cell(j);
+        let dmin = [(0, 1), (0, -1), (1, 0), (-1, 0)]
+            .iter()
+            .map(|&(dx, dy)| {
+                sub.offset(c, dx, dy).map_or(f64::NEG_INFINITY, |n| {
+                    let i = sub.index(n);
+                    if inside[i] { depth.at(i) } else { f64::NEG_INFINITY }
+                })
+            })
+            .fold(f64::INFINITY, f64::min);
+        // Levels k with dmin < level(k) <= d.
+        let mut k = if dmin.is_finite() {
+            ((dmin - res) / w).floor().max(-1.0) as i64 + 1
+        } else {
+            0
+        } as usize;
+        while level_of(k) <= d {
+            if level_of(k) > dmin {
+                if buckets.len() <= k {
+                    buckets.resize(k + 1, Vec::new());
+                }
+                buckets[k].push(j);
+            }
+            k += 1;
         }
-        for lp in trace_loops(&sub, &mask) {
+    }
+    let mut visited = vec![0u32; sub.len()];
+    let mut tasks = Vec::new();
+    for (k, starts) in buckets.iter().enumerate() {
+        let level = level_of(k);
+        let mask = |j: usize| inside[j] && depth.at(j) >= level;
+        for lp in trace_from(&sub, &mask, starts.iter().copied(), &mut visited, k as u32 + 1) {
             let mut pts: Vec<Point2> = lp.iter().map(|&j| sub.center_of(j)).collect();
             if pts.len() > 2 {
                 pts.push(pts[0]);
