@@ -144,8 +144,9 @@ pub fn route_from(
     }
 }
 
-/// Regions with more tasks than this are routed by the sweep order alone.
-pub const MAX_SEARCH_TASKS: usize = 400;
+/// Regions whose tasks offer more entry/exit points than this are routed by the sweep order alone (the
+/// search's dense distance matrix has the square of this many entries).
+pub const MAX_SEARCH_POINTS: usize = 1600;
 
 /// Cost of driving `legs` from `entry`: task lengths plus straight connections.
 fn legs_cost(tasks: &[Task], entry: Point2, legs: &[Leg]) -> f64 {
