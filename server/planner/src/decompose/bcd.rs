@@ -88,11 +88,9 @@ fn sweep(space: &CoverageSpace, transpose: bool) -> (Vec<u32>, usize) {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
     use crate::decompose::{DecomposeParams, DecompositionMethod, decompose};
     use crate::geom::Point2;
     use crate::map::{CellState, GridGeometry, OccupancyGrid};
-    use crate::space::RobotShape;
 
     #[test]
     fn pillar_in_a_room_gives_four_cells() {
@@ -100,15 +98,7 @@ mod tests {
         let g = GridGeometry::new(60, 40, 0.1, Point2::origin()).expect("valid");
         let mut grid = OccupancyGrid::filled(g, CellState::Free);
         grid.fill_rect(2.5, 1.5, 3.5, 2.5, CellState::Occupied);
-        let space = CoverageSpace::new(
-            grid,
-            RobotShape {
-                radius_m: 0.15,
-                tool_width_m: 0.3,
-            },
-            Point2::new(0.5, 0.5),
-        )
-        .expect("ok");
+        let space = crate::decompose::tests::small_robot_space(grid);
         let r = decompose(&space, DecompositionMethod::Bcd, &DecomposeParams::default());
         assert_eq!(r.count, 4);
         // Each cell is monotone along the sweep: every column (or row) slice is one run.
@@ -131,15 +121,7 @@ mod tests {
     fn empty_room_is_one_cell() {
         let g = GridGeometry::new(30, 20, 0.1, Point2::origin()).expect("valid");
         let grid = OccupancyGrid::filled(g, CellState::Free);
-        let space = CoverageSpace::new(
-            grid,
-            RobotShape {
-                radius_m: 0.15,
-                tool_width_m: 0.3,
-            },
-            Point2::new(0.5, 0.5),
-        )
-        .expect("ok");
+        let space = crate::decompose::tests::small_robot_space(grid);
         let r = decompose(&space, DecompositionMethod::Bcd, &DecomposeParams::default());
         assert_eq!(r.count, 1);
     }

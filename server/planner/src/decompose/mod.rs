@@ -272,6 +272,19 @@ pub(crate) mod tests {
     use crate::space::RobotShape;
     use proptest::prelude::*;
 
+    /// The coverage space of `grid` for the small test robot (radius 0.15 m, tool 0.3 m) docked at (0.5, 0.5).
+    pub(crate) fn small_robot_space(grid: OccupancyGrid) -> CoverageSpace {
+        CoverageSpace::new(
+            grid,
+            RobotShape {
+                radius_m: 0.15,
+                tool_width_m: 0.3,
+            },
+            Point2::new(0.5, 0.5),
+        )
+        .expect("space")
+    }
+
     /// A random cluttered room for property tests.
     pub(crate) fn random_space(seed: u64, w: usize, h: usize, obstacles: usize) -> Option<CoverageSpace> {
         let g = GridGeometry::new(w, h, 0.1, Point2::origin()).expect("valid");

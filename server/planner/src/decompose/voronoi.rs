@@ -119,21 +119,12 @@ mod tests {
     use crate::decompose::{DecompositionMethod, decompose};
     use crate::geom::Point2;
     use crate::map::{CellState, GridGeometry, OccupancyGrid};
-    use crate::space::RobotShape;
 
     #[test]
     fn region_count_follows_target_area() {
         let g = GridGeometry::new(100, 100, 0.1, Point2::origin()).expect("valid");
         let grid = OccupancyGrid::filled(g, CellState::Free);
-        let space = CoverageSpace::new(
-            grid,
-            RobotShape {
-                radius_m: 0.15,
-                tool_width_m: 0.3,
-            },
-            Point2::new(0.5, 0.5),
-        )
-        .expect("ok");
+        let space = crate::decompose::tests::small_robot_space(grid);
         let p = DecomposeParams {
             target_area_m2: Some(4.0),
             ..Default::default()

@@ -115,7 +115,6 @@ mod tests {
     use crate::decompose::{DecompositionMethod, decompose};
     use crate::geom::Point2;
     use crate::map::{CellState, GridGeometry, OccupancyGrid};
-    use crate::space::RobotShape;
 
     #[test]
     fn two_rooms_split_at_the_door() {
@@ -124,15 +123,7 @@ mod tests {
         let mut grid = OccupancyGrid::filled(g, CellState::Free);
         grid.fill_rect(3.95, 0.0, 4.05, 1.5, CellState::Occupied);
         grid.fill_rect(3.95, 2.5, 4.05, 4.0, CellState::Occupied);
-        let space = CoverageSpace::new(
-            grid,
-            RobotShape {
-                radius_m: 0.15,
-                tool_width_m: 0.3,
-            },
-            Point2::new(0.5, 0.5),
-        )
-        .expect("ok");
+        let space = crate::decompose::tests::small_robot_space(grid);
         let r = decompose(&space, DecompositionMethod::Walls, &DecomposeParams::default());
         assert_eq!(r.count, 2, "rooms left and right of the door");
         let left = r.labels[g.index(g.locate(Point2::new(1.0, 2.0)).expect("on map"))];

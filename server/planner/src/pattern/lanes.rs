@@ -338,19 +338,6 @@ fn refine(ok: &dyn Fn(Point2) -> bool, at: &dyn Fn(f64, f64) -> Point2, v: f64, 
 mod tests {
     use super::*;
     use crate::map::{CellState, GridGeometry, OccupancyGrid};
-    use crate::space::RobotShape;
-
-    fn space_with(grid: OccupancyGrid) -> CoverageSpace {
-        CoverageSpace::new(
-            grid,
-            RobotShape {
-                radius_m: 0.15,
-                tool_width_m: 0.3,
-            },
-            Point2::new(0.5, 0.5),
-        )
-        .expect("ok")
-    }
 
     fn whole(space: &CoverageSpace) -> (Vec<u32>, Vec<u32>, Vec<usize>, Vec<usize>) {
         let g = space.geometry();
@@ -368,7 +355,7 @@ mod tests {
     #[test]
     fn long_room_gets_lanes_along_its_length() {
         let g = GridGeometry::new(80, 20, 0.05, Point2::origin()).expect("valid");
-        let space = space_with(OccupancyGrid::filled(g, CellState::Free));
+        let space = crate::decompose::tests::small_robot_space(OccupancyGrid::filled(g, CellState::Free));
         let (labels, target_labels, cells, targets) = whole(&space);
         let view = RegionView {
             id: 0,
@@ -407,7 +394,7 @@ mod tests {
         let g = GridGeometry::new(60, 40, 0.05, Point2::origin()).expect("valid");
         let mut grid = OccupancyGrid::filled(g, CellState::Free);
         grid.fill_rect(1.3, 0.8, 1.7, 1.2, CellState::Occupied);
-        let space = space_with(grid);
+        let space = crate::decompose::tests::small_robot_space(grid);
         let (labels, target_labels, cells, targets) = whole(&space);
         let view = RegionView {
             id: 0,
