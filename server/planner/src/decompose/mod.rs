@@ -75,8 +75,9 @@ pub trait Decomposer {
 /// The decompositions the planner offers.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
 pub enum DecompositionMethod {
-    /// The default: plan with boustrophedon cells and with wall division (in the requested pattern), and with
-    /// one spiral over the undivided space, and keep the shortest plan that meets the coverage bar. No single
+    /// The default: plan with boustrophedon cells and with wall division (in the requested pattern), and — up
+    /// to `pipeline::AUTO_SPIRAL_MAX_CELLS` reachable cells — with one spiral over the undivided space, and
+    /// keep the shortest plan that meets the coverage bar. No single
     /// strategy wins on every kind of map: rooms favour the contour-following spiral, racks and aisles the
     /// cells, open ground with round obstacles the wall division.
     #[default]

@@ -18,6 +18,9 @@ use crate::pattern::{PatternMethod, Task};
 use crate::space::CoverageSpace;
 use route::{RegionRoute, region_options};
 
+/// Largest reachable set (cells) for which `auto` also tries one spiral over the undivided space.
+pub const AUTO_SPIRAL_MAX_CELLS: usize = 250_000;
+
 /// Everything a plan request can choose. `Default` is the best combination.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PlanParams {
@@ -190,11 +193,15 @@ impl PlanOutput {
 pub fn plan(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanMonitor) -> Result<PlanOutput> {
     if params.decomposition == DecompositionMethod::Auto {
         let mut best: Option<PlanOutput> = None;
-        let portfolio = [
+        let mut portfolio = vec![
             (DecompositionMethod::Bcd, params.pattern),
             (DecompositionMethod::Walls, params.pattern),
-            (DecompositionMethod::Single, PatternMethod::Spiral),
         ];
+        // The undivided spiral's routing and pass selection grow faster than linearly with the area (one
+        // region holding every ring); on large sites it costs minutes, so it only joins below this size.
+        if space.reachable_count() <= AUTO_SPIRAL_MAX_CELLS {
+            portfolio.push((DecompositionMethod::Single, PatternMethod::Spiral));
+        }
         for (d, pattern) in portfolio {
             let out = plan(
                 space,
