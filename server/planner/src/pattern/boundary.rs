@@ -167,22 +167,28 @@ pub fn select(
     // A lane covers w / res² new cells per metre; a candidate's cost is its length driven twice (there and
     // back along the wall, in the worst case) plus a tool width to turn off and on the lane set.
     let lane_yield = w / (res * res);
-    let gain = |raster: &CoverageRaster, t: &Task| -> usize {
-        let mut seen = std::collections::HashSet::new();
+    // Cells a candidate would newly cover, counted once even where its segments' capsules overlap: a
+    // per-cell stamp (one allocation for the whole selection) instead of a set per evaluation.
+    let mut stamp_of = vec![0u32; g.len()];
+    let mut stamp = 0u32;
+    let mut gain = |raster: &CoverageRaster, t: &Task| -> usize {
+        stamp += 1;
+        let mut count = 0;
         let pts = &t.points;
-        let segs: Vec<(Point2, Point2)> = if pts.len() == 1 {
+        let segs = if pts.len() == 1 {
             vec![(pts[0], pts[0])]
         } else {
             pts.windows(2).map(|s| (s[0], s[1])).collect()
         };
         for (a, b) in segs {
             for_each_cell_in_capsule(&g, a, b, w / 2.0 + 1e-9, |i| {
-                if space.coverable[i] && !raster.is_covered(i) {
-                    seen.insert(i);
+                if space.coverable[i] && !raster.is_covered(i) && stamp_of[i] != stamp {
+                    stamp_of[i] = stamp;
+                    count += 1;
                 }
             });
         }
-        seen.len()
+        count
     };
     let cost = |t: &Task| 2.0 * t.length() + w;
     let mut chosen = Vec::new();
