@@ -5,6 +5,7 @@ use serde::{Deserialize, Serialize};
 /// A plan as it goes over the wire. Positions in metres in `frame`, speeds in m/s, times in seconds from the
 /// plan's start.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct PlanDocument {
     /// Plan id (`p-…`).
     pub plan_id: String,
@@ -22,6 +23,7 @@ pub struct PlanDocument {
 
 /// What a waypoint does.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 #[serde(rename_all = "lowercase")]
 pub enum WaypointKindDoc {
     /// Sweeping.
@@ -32,6 +34,7 @@ pub enum WaypointKindDoc {
 
 /// One waypoint.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct WaypointDoc {
     /// x, metres, map frame.
     pub x: f64,
@@ -52,6 +55,7 @@ pub struct WaypointDoc {
 
 /// One region.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct RegionDoc {
     /// Region id.
     pub id: u32,
@@ -61,6 +65,7 @@ pub struct RegionDoc {
 
 /// Plan metrics (DESIGN §6).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct PlanMetricsDoc {
     /// Covered share of coverable cells, percent.
     pub coverage_pct: f64,

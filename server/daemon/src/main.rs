@@ -26,10 +26,26 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Run the service: HTTP API, plan jobs, durable store (embedded defaults: 127.0.0.1:7878, ./shift-data,
+    /// a demo site).
+    Serve(ServeArgs),
     /// Plan one coverage path and write the plan JSON (DESIGN §5.1).
     Plan(PlanArgs),
     /// Evaluate every decomposition × order and the baselines on a folder of scenes.
     Eval(EvalArgs),
+}
+
+#[derive(clap::Args)]
+struct ServeArgs {
+    /// Listen address (overrides [http] bind).
+    #[arg(long)]
+    bind: Option<std::net::SocketAddr>,
+    /// Data folder for the store (overrides [store] data_dir).
+    #[arg(long)]
+    data_dir: Option<PathBuf>,
+    /// TOML config file (see deploy/shiftd.toml); embedded defaults without it.
+    #[arg(long)]
+    config: Option<PathBuf>,
 }
 
 #[derive(clap::Args)]
@@ -99,6 +115,7 @@ fn main() -> ExitCode {
         .init();
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Serve(args) => cmd_serve(args),
         Command::Plan(args) => cmd_plan(args),
         Command::Eval(args) => cmd_eval(args),
     };
@@ -110,6 +127,59 @@ fn main() -> ExitCode {
             ExitCode::from(2)
         }
     }
+}
+
+fn cmd_serve(args: ServeArgs) -> Result<()> {
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env()
+                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info,tower_http=warn")),
+        )
+        .init();
+    let mut config = match &args.config {
+        Some(path) => shiftd::Config::load(path)?,
+        None => shiftd::Config::default(),
+    };
+    if let Some(bind) = args.bind {
+        config.http.bind = bind;
+    }
+    if let Some(dir) = args.data_dir {
+        config.store.data_dir = dir;
+    }
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .enable_all()
+        .thread_name("shiftd-io")
+        .build()
+        .context("starting the tokio runtime")?;
+    runtime.block_on(async move {
+        let listener = tokio::net::TcpListener::bind(config.http.bind)
+            .await
+            .with_context(|| format!("binding {}", config.http.bind))?;
+        shiftd::run(config, listener, shutdown_signal()).await
+    })
+}
+
+/// Resolves on SIGINT (Ctrl-C) or SIGTERM.
+async fn shutdown_signal() {
+    let ctrl_c = async {
+        let _ = tokio::signal::ctrl_c().await;
+    };
+    #[cfg(unix)]
+    let term = async {
+        match tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()) {
+            Ok(mut s) => {
+                s.recv().await;
+            }
+            Err(_) => std::future::pending::<()>().await,
+        }
+    };
+    #[cfg(not(unix))]
+    let term = std::future::pending::<()>();
+    tokio::select! {
+        () = ctrl_c => {},
+        () = term => {},
+    }
+    tracing::info!("shutdown requested");
 }
 
 fn cmd_plan(args: PlanArgs) -> Result<()> {

@@ -1,0 +1,363 @@
+//! HTTP API bodies (DESIGN §5.3): requests, responses, server-sent events and the error body.
+//!
+//! Field names are the contract: tests and fleet backends script against them. Positions are metres in the
+//! map frame, speeds m/s, accelerations m/s², times seconds unless a name says otherwise.
+
+use serde::{Deserialize, Serialize};
+
+use crate::plan::PlanMetricsDoc;
+
+/// Error body of every non-2xx answer: `{"error": {"code", "message"}}`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct ErrorBody {
+    /// What went wrong.
+    pub error: ErrorDetail,
+}
+
+/// The inside of [`ErrorBody`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct ErrorDetail {
+    /// Stable machine-readable code, e.g. `invalid_request`, `not_found`, `queue_full`.
+    pub code: String,
+    /// Human-readable explanation: what is wrong and where.
+    pub message: String,
+}
+
+/// The robot a plan is for.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+#[serde(deny_unknown_fields)]
+pub struct RobotSpec {
+    /// Footprint radius, metres.
+    pub radius: f64,
+    /// Width of the cleaning / spraying tool, metres.
+    pub tool_width: f64,
+    /// Slowest cover speed, m/s.
+    #[serde(default = "default_v_min")]
+    pub v_min: f64,
+    /// Fastest speed, m/s.
+    #[serde(default = "default_v_max")]
+    pub v_max: f64,
+    /// Largest tangential acceleration, m/s².
+    #[serde(default = "default_a_max")]
+    pub a_max: f64,
+}
+
+fn default_v_min() -> f64 {
+    0.1
+}
+fn default_v_max() -> f64 {
+    1.0
+}
+fn default_a_max() -> f64 {
+    0.5
+}
+
+/// One Gaussian blob of the attribute map: A(p) += amplitude · exp(−|p − (x, y)|² / (2 sigma²)), clamped to [0, 1].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+#[serde(deny_unknown_fields)]
+pub struct AttributeBlob {
+    /// Centre x, metres, map frame.
+    pub x: f64,
+    /// Centre y, metres, map frame.
+    pub y: f64,
+    /// Standard deviation, metres.
+    pub sigma: f64,
+    /// Peak value in [0, 1].
+    pub amplitude: f64,
+}
+
+/// An attribute map (dirtiness, dryness) given inline.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+#[serde(deny_unknown_fields)]
+pub struct AttributeSpec {
+    /// Gaussian blobs summed into A(x, y).
+    pub blobs: Vec<AttributeBlob>,
+}
+
+/// Planner choices; every field optional, the defaults are the best combination.
+#[derive(Debug, Clone, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+#[serde(deny_unknown_fields)]
+pub struct PlanOptions {
+    /// `auto` (default), `bcd`, `walls`, `voronoi`, `grid`, `none`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub decomposition: Option<String>,
+    /// `two-opt` (default), `rrt`, `anneal`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub order: Option<String>,
+    /// `lanes` (default), `spiral`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pattern: Option<String>,
+    /// Seed for every random choice (default 1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub seed: Option<u64>,
+}
+
+/// `POST /v1/plans`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+#[serde(deny_unknown_fields)]
+pub struct PlanRequest {
+    /// Site whose map to plan on.
+    pub site: String,
+    /// Start and return point (the dock), metres, map frame.
+    pub start: [f64; 2],
+    /// The robot.
+    pub robot: RobotSpec,
+    /// Attribute map; uniform when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub attribute: Option<AttributeSpec>,
+    /// Only cover inside this polygon (`[[x, y], …]`, metres, map frame); the whole reachable map when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub region: Option<Vec<[f64; 2]>>,
+    /// Planner choices.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub options: Option<PlanOptions>,
+}
+
+/// Lifecycle of a plan.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+#[serde(rename_all = "lowercase")]
+pub enum PlanStatus {
+    /// Accepted and persisted, waiting for a worker.
+    Queued,
+    /// A worker is computing it.
+    Planning,
+    /// Computed; the path is available.
+    Ready,
+    /// Assigned to a robot that is driving it.
+    Active,
+    /// The robot finished it.
+    Done,
+    /// Could not be computed; `error` says why.
+    Failed,
+    /// Cancelled by a client before it finished.
+    Cancelled,
+}
+
+impl PlanStatus {
+    /// True when nothing will change the plan's computation any more.
+    pub fn is_final(self) -> bool {
+        matches!(
+            self,
+            Self::Ready | Self::Active | Self::Done | Self::Failed | Self::Cancelled
+        )
+    }
+
+    /// Lower-case name as on the wire.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Queued => "queued",
+            Self::Planning => "planning",
+            Self::Ready => "ready",
+            Self::Active => "active",
+            Self::Done => "done",
+            Self::Failed => "failed",
+            Self::Cancelled => "cancelled",
+        }
+    }
+
+    /// Every status, for exporting gauges.
+    pub const ALL: [PlanStatus; 7] = [
+        Self::Queued,
+        Self::Planning,
+        Self::Ready,
+        Self::Active,
+        Self::Done,
+        Self::Failed,
+        Self::Cancelled,
+    ];
+}
+
+/// `202 Accepted` answer to `POST /v1/plans`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct PlanAccepted {
+    /// The new plan's id.
+    pub plan_id: String,
+    /// Always `queued`.
+    pub status: PlanStatus,
+}
+
+/// A region whose cover path is computed (the robot may start on it while the rest compute).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct RegionReady {
+    /// Region id (as in the final plan's `regions`).
+    pub region: u32,
+    /// Outer contour, metres, map frame.
+    pub polygon: Vec<[f64; 2]>,
+    /// The region's cover path `[[x, y], …]`, metres, map frame, before it is linked into the tour.
+    pub path: Vec<[f64; 2]>,
+}
+
+/// `GET /v1/plans/{id}`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct PlanStatusResponse {
+    /// Plan id.
+    pub plan_id: String,
+    /// Site it plans on.
+    pub site: String,
+    /// Lifecycle state.
+    pub status: PlanStatus,
+    /// Fraction of the computation done, 0–1.
+    pub progress: f64,
+    /// Current version (1 when computed; corrections increment it).
+    pub version: u64,
+    /// Regions whose cover paths are computed so far.
+    pub regions_ready: u32,
+    /// Figures of merit once ready.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub metrics: Option<PlanMetricsDoc>,
+    /// Why the plan failed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub error: Option<String>,
+    /// Remarks from the planner (e.g. a start snapped out of an obstacle).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
+    /// When the request was accepted, milliseconds since the Unix epoch.
+    pub created_ms: u64,
+    /// Last status change, milliseconds since the Unix epoch.
+    pub updated_ms: u64,
+}
+
+/// One point of `GET /v1/plans/{id}/speed-profile`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct SpeedSample {
+    /// Arc length from the start, metres.
+    pub s: f64,
+    /// Speed, m/s.
+    pub v: f64,
+    /// Time from the start, seconds.
+    pub t: f64,
+}
+
+/// `GET /v1/plans/{id}/speed-profile`: one sample per waypoint.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct SpeedProfileResponse {
+    /// Plan id.
+    pub plan_id: String,
+    /// Version the samples belong to.
+    pub version: u64,
+    /// Per waypoint: arc length, speed, time.
+    pub samples: Vec<SpeedSample>,
+}
+
+/// `GET /v1/sites/{site}` and the 201 answer to a map upload.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct SiteSummary {
+    /// Site name.
+    pub site: String,
+    /// Columns.
+    pub width: u64,
+    /// Rows.
+    pub height: u64,
+    /// Metres per cell.
+    pub resolution: f64,
+    /// Map-frame position of cell (0, 0)'s outer corner, metres.
+    pub origin: [f64; 2],
+    /// Free cells.
+    pub free_cells: u64,
+    /// Points in the live ikd-tree (0 until robots stream clouds).
+    pub points_in_tree: u64,
+    /// Last map change, milliseconds since the Unix epoch.
+    pub updated_ms: u64,
+    /// Remarks from reading the map.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
+}
+
+/// Server-sent event of `GET /v1/plans/{id}/events`; the SSE `event:` name is [`PlanEvent::name`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+#[serde(tag = "type", rename_all = "kebab-case")]
+pub enum PlanEvent {
+    /// The plan's status changed (also sent first, on connect).
+    Status(PlanStatusResponse),
+    /// Computation advanced.
+    Progress {
+        /// Plan id.
+        plan_id: String,
+        /// 0–1.
+        progress: f64,
+    },
+    /// A region's cover path is ready.
+    RegionReady {
+        /// Plan id.
+        plan_id: String,
+        /// The region.
+        region: RegionReady,
+    },
+}
+
+impl PlanEvent {
+    /// The plan this event is about.
+    pub fn plan_id(&self) -> &str {
+        match self {
+            Self::Status(s) => &s.plan_id,
+            Self::Progress { plan_id, .. } | Self::RegionReady { plan_id, .. } => plan_id,
+        }
+    }
+
+    /// SSE event name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Status(_) => "status",
+            Self::Progress { .. } => "progress",
+            Self::RegionReady { .. } => "region-ready",
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn design_plan_request_parses_with_defaults() {
+        let text = r#"{"site": "demo", "start": [0.5, 0.5], "robot": {"radius": 0.15, "tool_width": 0.3}}"#;
+        let r: PlanRequest = serde_json::from_str(text).expect("parses");
+        assert_eq!(r.robot.v_min, 0.1);
+        assert_eq!(r.robot.v_max, 1.0);
+        assert_eq!(r.robot.a_max, 0.5);
+        assert!(r.options.is_none());
+        let full = r#"{"site": "demo", "start": [1, 2], "robot": {"radius": 0.15, "tool_width": 0.3,
+            "v_min": 0.2, "v_max": 0.8, "a_max": 0.4}, "attribute": {"blobs": [{"x": 1, "y": 1, "sigma": 0.5,
+            "amplitude": 0.9}]}, "region": [[0,0],[4,0],[4,4]], "options": {"decomposition": "bcd",
+            "order": "rrt", "pattern": "lanes", "seed": 7}}"#;
+        let r: PlanRequest = serde_json::from_str(full).expect("parses");
+        assert_eq!(r.options.as_ref().and_then(|o| o.seed), Some(7));
+        assert_eq!(r.attribute.as_ref().map(|a| a.blobs.len()), Some(1));
+    }
+
+    #[test]
+    fn unknown_fields_are_rejected() {
+        let text = r#"{"site": "demo", "start": [0.5, 0.5], "robot": {"radius": 0.15, "tool_width": 0.3}, "x": 1}"#;
+        assert!(serde_json::from_str::<PlanRequest>(text).is_err());
+    }
+
+    #[test]
+    fn events_are_tagged() {
+        let e = PlanEvent::Progress {
+            plan_id: "p-1".into(),
+            progress: 0.5,
+        };
+        let v = serde_json::to_value(&e).expect("ser");
+        assert_eq!(v["type"], "progress");
+        assert_eq!(e.name(), "progress");
+        assert_eq!(
+            serde_json::to_string(&PlanStatus::Cancelled).expect("ser"),
+            "\"cancelled\""
+        );
+    }
+}

@@ -1,0 +1,237 @@
+//! The engine thread: owns the [`Engine`], the [`Store`] and the [`JobRunner`]; takes events from a bounded
+//! channel, persists what the engine says to persist *before* answering, updates the read model, starts and
+//! cancels jobs, and publishes plan events. Handlers talk to it through [`BrainHandle`].
+
+use std::sync::Arc;
+use std::time::{SystemTime, UNIX_EPOCH};
+
+use shift_engine::{Command, Engine, EngineError, Event, PlanRecord};
+use shift_proto::{PlanEvent, SiteSummary};
+use tokio::sync::{broadcast, mpsc, oneshot, watch};
+
+use crate::jobs::JobRunner;
+use crate::store::Store;
+use crate::views::Views;
+
+/// Capacity of the engine's inbox; handlers wait for room (back-pressure), progress reports are dropped.
+pub const INBOX: usize = 1024;
+
+/// What the engine thread answers a handler.
+#[derive(Debug, Default)]
+pub struct Reply {
+    /// Plan records changed by the event (the accepted plan first).
+    pub plans: Vec<PlanRecord>,
+    /// Site summaries changed by the event.
+    pub sites: Vec<SiteSummary>,
+}
+
+/// Why an event was not carried out.
+#[derive(Debug, thiserror::Error)]
+pub enum BrainError {
+    /// The engine refused it.
+    #[error(transparent)]
+    Engine(#[from] EngineError),
+    /// The store could not commit it: nothing is acknowledged.
+    #[error("store: {0}")]
+    Store(String),
+    /// The engine thread has stopped.
+    #[error("the engine has stopped")]
+    Stopped,
+}
+
+/// A message to the engine thread.
+#[derive(Debug)]
+pub enum Msg {
+    /// Handle an event; answer on `reply` when given.
+    Event {
+        /// The event (boxed: messages stay small in the channel).
+        event: Box<Event>,
+        /// Where to answer.
+        reply: Option<oneshot::Sender<Result<Reply, BrainError>>>,
+    },
+    /// Stop every running job (shutdown after the grace period); they go back to the queue.
+    InterruptJobs,
+    /// Leave the loop.
+    Stop,
+}
+
+impl Msg {
+    /// An event nobody waits for.
+    pub fn event(event: Event) -> Self {
+        Self::Event {
+            event: Box::new(event),
+            reply: None,
+        }
+    }
+}
+
+/// A cheap, cloneable handle to the engine thread.
+#[derive(Debug, Clone)]
+pub struct BrainHandle {
+    tx: mpsc::Sender<Msg>,
+    running: watch::Receiver<usize>,
+}
+
+impl BrainHandle {
+    /// Sends an event and waits for the engine's answer (after the store committed).
+    pub async fn call(&self, event: Event) -> Result<Reply, BrainError> {
+        let (reply, rx) = oneshot::channel();
+        self.tx
+            .send(Msg::Event {
+                event: Box::new(event),
+                reply: Some(reply),
+            })
+            .await
+            .map_err(|_| BrainError::Stopped)?;
+        rx.await.map_err(|_| BrainError::Stopped)?
+    }
+
+    /// Sends an event without waiting.
+    pub async fn tell(&self, msg: Msg) -> Result<(), BrainError> {
+        self.tx.send(msg).await.map_err(|_| BrainError::Stopped)
+    }
+
+    /// Watches the number of running jobs.
+    pub fn running(&self) -> watch::Receiver<usize> {
+        self.running.clone()
+    }
+
+    /// True while the engine thread takes events.
+    pub fn is_alive(&self) -> bool {
+        !self.tx.is_closed()
+    }
+
+    /// The inbox, for the job runner.
+    pub fn sender(&self) -> mpsc::Sender<Msg> {
+        self.tx.clone()
+    }
+}
+
+/// Milliseconds since the Unix epoch.
+pub fn now_ms() -> u64 {
+    SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map_or(0, |d| d.as_millis() as u64)
+}
+
+/// Starts the engine thread.
+pub fn spawn(
+    engine: Engine,
+    store: Arc<Store>,
+    views: Arc<Views>,
+    events: broadcast::Sender<PlanEvent>,
+    runtime: tokio::runtime::Handle,
+) -> std::io::Result<(BrainHandle, std::thread::JoinHandle<()>)> {
+    let (tx, rx) = mpsc::channel(INBOX);
+    let (running_tx, running_rx) = watch::channel(0);
+    let jobs = JobRunner::new(runtime, tx.clone());
+    let brain = Brain {
+        engine,
+        store,
+        views,
+        events,
+        jobs,
+        running: running_tx,
+    };
+    let thread = std::thread::Builder::new()
+        .name("engine".into())
+        .spawn(move || brain.run(rx))?;
+    Ok((
+        BrainHandle {
+            tx,
+            running: running_rx,
+        },
+        thread,
+    ))
+}
+
+struct Brain {
+    engine: Engine,
+    store: Arc<Store>,
+    views: Arc<Views>,
+    events: broadcast::Sender<PlanEvent>,
+    jobs: JobRunner,
+    running: watch::Sender<usize>,
+}
+
+impl Brain {
+    fn run(mut self, mut rx: mpsc::Receiver<Msg>) {
+        while let Some(msg) = rx.blocking_recv() {
+            match msg {
+                Msg::Stop => break,
+                Msg::InterruptJobs => self.jobs.interrupt_all(),
+                Msg::Event { event, reply } => {
+                    let finished = match event.as_ref() {
+                        Event::JobFinished { plan_id, .. } => Some(plan_id.clone()),
+                        _ => None,
+                    };
+                    let result = self
+                        .engine
+                        .handle(*event, now_ms())
+                        .map_err(BrainError::from)
+                        .and_then(|cmds| self.execute(cmds));
+                    if let Some(id) = finished {
+                        self.jobs.finished(&id);
+                    }
+                    self.export_gauges();
+                    match (reply, result) {
+                        (Some(r), res) => {
+                            let _ = r.send(res);
+                        }
+                        (None, Err(e)) => tracing::warn!("engine event failed: {e}"),
+                        (None, Ok(_)) => {}
+                    }
+                }
+            }
+        }
+    }
+
+    /// Carries out commands in order. A failed store write stops the rest: nothing after it is acknowledged.
+    fn execute(&mut self, cmds: Vec<Command>) -> Result<Reply, BrainError> {
+        let mut reply = Reply::default();
+        let store_err = |e: anyhow::Error| {
+            tracing::error!("store write failed: {e:#}");
+            BrainError::Store(format!("{e:#}"))
+        };
+        for cmd in cmds {
+            match cmd {
+                Command::StoreSite(rec) => self.store.put_site(&rec).map_err(store_err)?,
+                Command::SiteChanged(summary) => {
+                    self.views.set_site(summary.clone());
+                    reply.sites.push(summary);
+                }
+                Command::StorePlan(rec) => {
+                    self.store.put_plan(&rec).map_err(store_err)?;
+                    self.views.set_record(rec.clone());
+                    reply.plans.push(rec);
+                }
+                Command::UpdatePlan(rec) => self.views.set_record(rec),
+                Command::StoreResult { plan_id, doc } => {
+                    self.store.put_result(&plan_id, &doc).map_err(store_err)?;
+                    self.views.set_doc(&plan_id, doc);
+                }
+                Command::StartJob(job) => self.jobs.start(job),
+                Command::CancelJob { plan_id } => self.jobs.cancel(&plan_id),
+                Command::Publish(event) => {
+                    // No subscriber is not an error.
+                    let _ = self.events.send(event);
+                }
+            }
+        }
+        Ok(reply)
+    }
+
+    fn export_gauges(&mut self) {
+        for (status, n) in self.engine.status_counts() {
+            metrics::gauge!("shift_plans", "status" => status.as_str()).set(n as f64);
+        }
+        metrics::gauge!("shift_plan_queue_depth").set(self.engine.queue_depth() as f64);
+        metrics::gauge!("shift_plan_jobs_running").set(self.engine.running() as f64);
+        let running = self.engine.running();
+        self.running.send_if_modified(|r| {
+            let changed = *r != running;
+            *r = running;
+            changed
+        });
+    }
+}

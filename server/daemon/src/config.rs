@@ -1,0 +1,151 @@
+//! The one typed configuration of `shiftd serve` (TOML, unknown keys refused). `deploy/shiftd.toml` documents
+//! every key with its default and is parsed by a unit test, so the two cannot drift.
+
+use std::net::SocketAddr;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+use serde::Deserialize;
+
+/// Everything `shiftd serve` can be told.
+#[derive(Debug, Clone, PartialEq, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct Config {
+    /// HTTP API.
+    pub http: HttpConfig,
+    /// Persistence.
+    pub store: StoreConfig,
+    /// Plan jobs.
+    pub jobs: JobsConfig,
+    /// The bundled demo site.
+    pub demo: DemoConfig,
+}
+
+/// `[http]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct HttpConfig {
+    /// Listen address.
+    pub bind: SocketAddr,
+    /// Largest request body, bytes (413 above).
+    pub max_body_bytes: usize,
+    /// Per-request timeout, seconds (event streams exempt).
+    pub request_timeout_s: u64,
+    /// Bearer token for mutating routes; empty = none.
+    pub auth_token: String,
+}
+
+impl Default for HttpConfig {
+    fn default() -> Self {
+        Self {
+            bind: SocketAddr::from(([127, 0, 0, 1], 7878)),
+            max_body_bytes: 64 << 20,
+            request_timeout_s: 30,
+            auth_token: String::new(),
+        }
+    }
+}
+
+/// `[store]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct StoreConfig {
+    /// Folder of the redb database.
+    pub data_dir: PathBuf,
+}
+
+impl Default for StoreConfig {
+    fn default() -> Self {
+        Self {
+            data_dir: PathBuf::from("./shift-data"),
+        }
+    }
+}
+
+/// `[jobs]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct JobsConfig {
+    /// Plans computed at once; 0 = one per core.
+    pub workers: usize,
+    /// Plans waiting for a worker before 429.
+    pub queue_capacity: usize,
+    /// Seconds running plans get to finish on shutdown.
+    pub shutdown_grace_s: u64,
+}
+
+impl Default for JobsConfig {
+    fn default() -> Self {
+        Self {
+            workers: 0,
+            queue_capacity: 64,
+            shutdown_grace_s: 10,
+        }
+    }
+}
+
+impl JobsConfig {
+    /// Workers with 0 resolved to the number of cores.
+    pub fn effective_workers(&self) -> usize {
+        if self.workers > 0 {
+            self.workers
+        } else {
+            std::thread::available_parallelism().map_or(2, usize::from)
+        }
+    }
+}
+
+/// `[demo]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DemoConfig {
+    /// Load the bundled demo site when the store lacks it.
+    pub enabled: bool,
+    /// Its name.
+    pub site: String,
+}
+
+impl Default for DemoConfig {
+    fn default() -> Self {
+        Self {
+            enabled: true,
+            site: "demo".into(),
+        }
+    }
+}
+
+impl Config {
+    /// Parses TOML text.
+    pub fn parse(text: &str) -> Result<Self> {
+        Ok(toml::from_str(text)?)
+    }
+
+    /// Reads and parses a file.
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+        Self::parse(&text).with_context(|| format!("parsing {}", path.display()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn documented_default_file_matches_the_embedded_defaults() {
+        let text = include_str!("../../../deploy/shiftd.toml");
+        let parsed = Config::parse(text).expect("deploy/shiftd.toml parses");
+        assert_eq!(parsed, Config::default());
+    }
+
+    #[test]
+    fn empty_config_is_the_default_and_typos_are_errors() {
+        assert_eq!(Config::parse("").expect("empty is fine"), Config::default());
+        let e = Config::parse("[http]\nbnd = \"127.0.0.1:1\"").expect_err("typo");
+        assert!(format!("{e:#}").contains("bnd"), "{e:#}");
+        assert!(Config::parse("[jobs]\nworkers = -1").is_err());
+        let c = Config::parse("[jobs]\nworkers = 3\n[http]\nauth_token = \"s3\"").expect("parses");
+        assert_eq!(c.jobs.effective_workers(), 3);
+        assert_eq!(c.http.auth_token, "s3");
+    }
+}

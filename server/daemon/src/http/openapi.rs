@@ -1,0 +1,37 @@
+//! `GET /openapi.json`, generated from the handlers' annotations and the wire types, and `GET /docs`, a small
+//! self-contained page that lists the routes from that document (no external assets).
+
+use axum::Json;
+use axum::response::Html;
+use utoipa::OpenApi;
+
+/// The API description.
+#[derive(OpenApi)]
+#[openapi(
+    info(title = "SHIFT API", description = "Coverage plans for robot fleets (DESIGN §5.3)."),
+    paths(
+        super::sites::upload_map,
+        super::sites::get_site,
+        super::plans::create_plan,
+        super::plans::get_plan,
+        super::plans::get_path,
+        super::plans::get_speed_profile,
+        super::plans::cancel_plan,
+        super::events::plan_events,
+        super::ops::healthz,
+        super::ops::readyz,
+        super::ops::metrics_text,
+    ),
+    tags((name = "plans"), (name = "sites"), (name = "ops"))
+)]
+pub struct ApiDoc;
+
+/// The OpenAPI document.
+pub async fn openapi_json() -> Json<utoipa::openapi::OpenApi> {
+    Json(ApiDoc::openapi())
+}
+
+/// A small docs page.
+pub async fn docs_page() -> Html<&'static str> {
+    Html(include_str!("docs.html"))
+}

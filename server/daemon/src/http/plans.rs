@@ -1,0 +1,132 @@
+//! Plan routes: create, status, path, speed profile, cancel.
+
+use axum::extract::{Path, State};
+use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
+use shift_engine::Event;
+use shift_proto::{
+    ErrorBody, PlanAccepted, PlanDocument, PlanRequest, PlanStatusResponse, SpeedProfileResponse, SpeedSample,
+};
+
+use super::AppState;
+use super::error::{ApiError, ApiJson};
+use crate::views::PlanView;
+
+fn view(state: &AppState, plan_id: &str) -> Result<PlanView, ApiError> {
+    state
+        .views
+        .plan(plan_id)
+        .ok_or_else(|| ApiError::not_found(format!("unknown plan {plan_id:?}")))
+}
+
+fn ready_doc(state: &AppState, plan_id: &str) -> Result<std::sync::Arc<PlanDocument>, ApiError> {
+    let v = view(state, plan_id)?;
+    v.doc.ok_or_else(|| {
+        ApiError::new(
+            StatusCode::CONFLICT,
+            "not_ready",
+            format!(
+                "plan {plan_id} is {}; its path is not computed",
+                v.record.status.as_str()
+            ),
+        )
+    })
+}
+
+/// Ask for a plan. Answers 202 at once, after the request is committed to the store; the job runs on the
+/// worker pool. Poll `GET /v1/plans/{id}` or follow `/events`.
+#[utoipa::path(post, path = "/v1/plans", tag = "plans", request_body = PlanRequest,
+    responses((status = 202, body = PlanAccepted, headers(("Location" = String))),
+        (status = 400, body = ErrorBody), (status = 401, body = ErrorBody), (status = 403, body = ErrorBody),
+        (status = 404, description = "unknown site", body = ErrorBody),
+        (status = 413, body = ErrorBody), (status = 429, description = "plan queue full", body = ErrorBody)))]
+pub async fn create_plan(
+    State(state): State<AppState>,
+    ApiJson(request): ApiJson<PlanRequest>,
+) -> Result<(StatusCode, HeaderMap, ApiJson<PlanAccepted>), ApiError> {
+    let reply = state.brain.call(Event::PlanRequested(request)).await?;
+    let rec = reply
+        .plans
+        .into_iter()
+        .next()
+        .ok_or_else(|| ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, "internal", "no plan record"))?;
+    let mut headers = HeaderMap::new();
+    if let Ok(v) = HeaderValue::from_str(&format!("/v1/plans/{}", rec.plan_id)) {
+        headers.insert(header::LOCATION, v);
+    }
+    Ok((
+        StatusCode::ACCEPTED,
+        headers,
+        ApiJson(PlanAccepted {
+            plan_id: rec.plan_id,
+            status: shift_proto::PlanStatus::Queued,
+        }),
+    ))
+}
+
+/// A plan's status, progress and metrics.
+#[utoipa::path(get, path = "/v1/plans/{id}", tag = "plans", params(("id" = String, Path)),
+    responses((status = 200, body = PlanStatusResponse), (status = 404, body = ErrorBody)))]
+pub async fn get_plan(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+) -> Result<ApiJson<PlanStatusResponse>, ApiError> {
+    Ok(ApiJson(view(&state, &id)?.record.to_response()))
+}
+
+/// The plan document (DESIGN §5.1), current version.
+#[utoipa::path(get, path = "/v1/plans/{id}/path", tag = "plans", params(("id" = String, Path)),
+    responses((status = 200, body = PlanDocument), (status = 404, body = ErrorBody),
+        (status = 409, description = "not computed yet", body = ErrorBody)))]
+pub async fn get_path(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+) -> Result<ApiJson<PlanDocument>, ApiError> {
+    let doc = ready_doc(&state, &id)?;
+    Ok(ApiJson((*doc).clone()))
+}
+
+/// Per waypoint: arc length s (m), speed v (m/s), time t (s).
+#[utoipa::path(get, path = "/v1/plans/{id}/speed-profile", tag = "plans", params(("id" = String, Path)),
+    responses((status = 200, body = SpeedProfileResponse), (status = 404, body = ErrorBody),
+        (status = 409, body = ErrorBody)))]
+pub async fn get_speed_profile(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+) -> Result<ApiJson<SpeedProfileResponse>, ApiError> {
+    let doc = ready_doc(&state, &id)?;
+    let mut s = 0.0;
+    let mut prev: Option<(f64, f64)> = None;
+    let samples = doc
+        .waypoints
+        .iter()
+        .map(|w| {
+            if let Some((x, y)) = prev {
+                s += (w.x - x).hypot(w.y - y);
+            }
+            prev = Some((w.x, w.y));
+            SpeedSample { s, v: w.v, t: w.t }
+        })
+        .collect();
+    Ok(ApiJson(SpeedProfileResponse {
+        plan_id: id,
+        version: doc.version,
+        samples,
+    }))
+}
+
+/// Cancel a queued or planning plan (409 once it finished).
+#[utoipa::path(delete, path = "/v1/plans/{id}", tag = "plans", params(("id" = String, Path)),
+    responses((status = 200, body = PlanStatusResponse), (status = 404, body = ErrorBody),
+        (status = 409, body = ErrorBody)))]
+pub async fn cancel_plan(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+) -> Result<ApiJson<PlanStatusResponse>, ApiError> {
+    let reply = state.brain.call(Event::CancelRequested { plan_id: id }).await?;
+    let rec = reply
+        .plans
+        .into_iter()
+        .next()
+        .ok_or_else(|| ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, "internal", "no plan record"))?;
+    Ok(ApiJson(rec.to_response()))
+}

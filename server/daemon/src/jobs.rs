@@ -1,0 +1,151 @@
+//! Plan jobs on the blocking pool: run the engine's job function with a monitor wired to the cancel flags and
+//! the engine thread, turn the planner's output into the plan document, and report back. The engine bounds
+//! how many run at once, so this never queues work of its own.
+
+use std::collections::HashMap;
+use std::panic::AssertUnwindSafe;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use shift_engine::{Event, JobOutcome, PlanJob, run_job};
+use shift_planner::PlannerError;
+use shift_planner::pipeline::{PlanMonitor, WaypointKind};
+use shift_proto::RegionReady;
+use tokio::sync::mpsc;
+
+use crate::brain::Msg;
+use crate::plan_doc::to_document;
+
+/// Spawns jobs and holds their cancel flags.
+#[derive(Debug)]
+pub struct JobRunner {
+    runtime: tokio::runtime::Handle,
+    to_engine: mpsc::Sender<Msg>,
+    cancels: HashMap<String, Arc<AtomicBool>>,
+    interrupt: Arc<AtomicBool>,
+}
+
+struct Monitor {
+    plan_id: String,
+    cancel: Arc<AtomicBool>,
+    interrupt: Arc<AtomicBool>,
+    to_engine: mpsc::Sender<Msg>,
+    last_sent: f64,
+}
+
+impl PlanMonitor for Monitor {
+    fn progress(&mut self, fraction: f64) {
+        if fraction >= self.last_sent + 0.01 {
+            self.last_sent = fraction;
+            // Progress is lossy on purpose: a full channel drops it rather than stall the planner.
+            let _ = self.to_engine.try_send(Msg::event(Event::JobProgress {
+                plan_id: self.plan_id.clone(),
+                progress: fraction,
+            }));
+        }
+    }
+
+    fn cancelled(&self) -> bool {
+        self.cancel.load(Ordering::Relaxed) || self.interrupt.load(Ordering::Relaxed)
+    }
+}
+
+impl JobRunner {
+    /// A runner spawning on `runtime`'s blocking pool and reporting to the engine thread.
+    pub fn new(runtime: tokio::runtime::Handle, to_engine: mpsc::Sender<Msg>) -> Self {
+        Self {
+            runtime,
+            to_engine,
+            cancels: HashMap::new(),
+            interrupt: Arc::new(AtomicBool::new(false)),
+        }
+    }
+
+    /// Starts a job.
+    pub fn start(&mut self, job: PlanJob) {
+        let cancel = Arc::new(AtomicBool::new(false));
+        self.cancels.insert(job.plan_id.clone(), cancel.clone());
+        let interrupt = self.interrupt.clone();
+        let to_engine = self.to_engine.clone();
+        self.runtime.spawn_blocking(move || {
+            let plan_id = job.plan_id.clone();
+            let mut monitor = Monitor {
+                plan_id: plan_id.clone(),
+                cancel,
+                interrupt: interrupt.clone(),
+                to_engine: to_engine.clone(),
+                last_sent: 0.0,
+            };
+            let t = Instant::now();
+            let result = std::panic::catch_unwind(AssertUnwindSafe(|| run_job(&job, &mut monitor)));
+            let compute_ms = t.elapsed().as_secs_f64() * 1e3;
+            let outcome = match result {
+                Ok(Ok((_space, out))) => {
+                    metrics::histogram!("shift_plan_compute_seconds").record(compute_ms / 1e3);
+                    let speed = job.request.robot.v_max;
+                    let doc = to_document(&plan_id, &out, speed, compute_ms);
+                    let regions = regions_ready(&out.waypoints, &doc.regions);
+                    JobOutcome::Planned {
+                        doc: Arc::new(doc),
+                        warnings: out.warnings,
+                        regions,
+                    }
+                }
+                Ok(Err(PlannerError::Cancelled)) if interrupt.load(Ordering::Relaxed) => JobOutcome::Interrupted,
+                Ok(Err(PlannerError::Cancelled)) => JobOutcome::Cancelled,
+                Ok(Err(e)) => JobOutcome::Failed(e.to_string()),
+                Err(_) => {
+                    tracing::error!(plan_id, "planner panicked");
+                    JobOutcome::Failed("internal planner error (logged)".into())
+                }
+            };
+            // The engine must learn of every end, so this one waits for room.
+            let _ = to_engine.blocking_send(Msg::event(Event::JobFinished { plan_id, outcome }));
+        });
+    }
+
+    /// Raises a job's cancel flag.
+    pub fn cancel(&mut self, plan_id: &str) {
+        if let Some(flag) = self.cancels.get(plan_id) {
+            flag.store(true, Ordering::Relaxed);
+        }
+    }
+
+    /// Forgets a finished job's flag.
+    pub fn finished(&mut self, plan_id: &str) {
+        self.cancels.remove(plan_id);
+    }
+
+    /// Stops every running job; they report [`JobOutcome::Interrupted`] and stay queued in the store.
+    pub fn interrupt_all(&self) {
+        self.interrupt.store(true, Ordering::Relaxed);
+    }
+}
+
+/// Each region's cover waypoints in visiting order, grouped from the finished path.
+fn regions_ready(
+    waypoints: &[shift_planner::pipeline::Waypoint],
+    regions: &[shift_proto::RegionDoc],
+) -> Vec<RegionReady> {
+    let mut out: Vec<RegionReady> = Vec::new();
+    for w in waypoints {
+        let (WaypointKind::Cover, Some(id)) = (w.kind, w.region) else {
+            continue;
+        };
+        let p = [w.position.x, w.position.y];
+        match out.iter_mut().find(|r| r.region == id) {
+            Some(r) => r.path.push(p),
+            None => out.push(RegionReady {
+                region: id,
+                polygon: regions
+                    .iter()
+                    .find(|r| r.id == id)
+                    .map(|r| r.polygon.clone())
+                    .unwrap_or_default(),
+                path: vec![p],
+            }),
+        }
+    }
+    out
+}

@@ -1,0 +1,217 @@
+//! The durable store: one redb database in the data dir holding sites (maps as uploaded), plan records, plan
+//! documents and the history of status transitions. Every write is its own committed transaction, so what
+//! the API acknowledged survives a kill -9. Only the engine thread writes; reads at start-up and for results.
+
+use std::path::Path;
+
+use anyhow::{Context, Result};
+use redb::{Database, ReadableDatabase, ReadableTable, TableDefinition};
+use serde::{Serialize, de::DeserializeOwned};
+use shift_engine::{PlanRecord, SiteRecord};
+use shift_proto::PlanDocument;
+
+const SITES: TableDefinition<'_, &str, &[u8]> = TableDefinition::new("sites");
+const PLANS: TableDefinition<'_, &str, &[u8]> = TableDefinition::new("plans");
+const RESULTS: TableDefinition<'_, &str, &[u8]> = TableDefinition::new("results");
+/// (plan id, transition number) → `{"status", "at_ms", "error"}`.
+const TRANSITIONS: TableDefinition<'_, (&str, u32), &[u8]> = TableDefinition::new("transitions");
+
+/// The database handle.
+#[derive(Debug)]
+pub struct Store {
+    db: Database,
+}
+
+#[derive(Serialize, serde::Deserialize)]
+struct Transition {
+    status: shift_proto::PlanStatus,
+    at_ms: u64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    error: Option<String>,
+}
+
+fn decode<T: DeserializeOwned>(what: &str, key: &str, bytes: &[u8]) -> Result<T> {
+    serde_json::from_slice(bytes).with_context(|| format!("store: {what} {key:?} is unreadable"))
+}
+
+impl Store {
+    /// Opens (or creates) `DIR/shift.redb`, creating the folder and every table.
+    pub fn open(data_dir: &Path) -> Result<Self> {
+        std::fs::create_dir_all(data_dir).with_context(|| format!("creating data dir {}", data_dir.display()))?;
+        let path = data_dir.join("shift.redb");
+        let db = Database::create(&path).with_context(|| format!("opening store {}", path.display()))?;
+        let txn = db.begin_write()?;
+        txn.open_table(SITES)?;
+        txn.open_table(PLANS)?;
+        txn.open_table(RESULTS)?;
+        txn.open_table(TRANSITIONS)?;
+        txn.commit()?;
+        Ok(Self { db })
+    }
+
+    /// Persists a site.
+    pub fn put_site(&self, site: &SiteRecord) -> Result<()> {
+        let bytes = serde_json::to_vec(site)?;
+        let txn = self.db.begin_write()?;
+        txn.open_table(SITES)?.insert(site.site.as_str(), bytes.as_slice())?;
+        txn.commit()?;
+        Ok(())
+    }
+
+    /// Persists a plan record and appends its status to the plan's history when it changed.
+    pub fn put_plan(&self, rec: &PlanRecord) -> Result<()> {
+        let bytes = serde_json::to_vec(rec)?;
+        let txn = self.db.begin_write()?;
+        {
+            let mut plans = txn.open_table(PLANS)?;
+            let previous = plans
+                .get(rec.plan_id.as_str())?
+                .map(|g| decode::<PlanRecord>("plan", &rec.plan_id, g.value()))
+                .transpose()?;
+            plans.insert(rec.plan_id.as_str(), bytes.as_slice())?;
+            let mut history = txn.open_table(TRANSITIONS)?;
+            let last = history
+                .range((rec.plan_id.as_str(), 0)..=(rec.plan_id.as_str(), u32::MAX))?
+                .next_back()
+                .transpose()?
+                .map(|(k, _)| k.value().1);
+            if previous.as_ref().is_none_or(|p| p.status != rec.status) {
+                let t = Transition {
+                    status: rec.status,
+                    at_ms: rec.updated_ms,
+                    error: rec.error.clone(),
+                };
+                let n = last.map_or(0, |n| n + 1);
+                history.insert((rec.plan_id.as_str(), n), serde_json::to_vec(&t)?.as_slice())?;
+            }
+        }
+        txn.commit()?;
+        Ok(())
+    }
+
+    /// Persists a plan document.
+    pub fn put_result(&self, plan_id: &str, doc: &PlanDocument) -> Result<()> {
+        let bytes = serde_json::to_vec(doc)?;
+        let txn = self.db.begin_write()?;
+        txn.open_table(RESULTS)?.insert(plan_id, bytes.as_slice())?;
+        txn.commit()?;
+        Ok(())
+    }
+
+    /// Every site.
+    pub fn sites(&self) -> Result<Vec<SiteRecord>> {
+        self.all(SITES, "site")
+    }
+
+    /// Every plan record.
+    pub fn plans(&self) -> Result<Vec<PlanRecord>> {
+        self.all(PLANS, "plan")
+    }
+
+    /// A plan's document.
+    pub fn result(&self, plan_id: &str) -> Result<Option<PlanDocument>> {
+        let txn = self.db.begin_read()?;
+        let t = txn.open_table(RESULTS)?;
+        t.get(plan_id)?
+            .map(|g| decode("result", plan_id, g.value()))
+            .transpose()
+    }
+
+    /// A plan's status history: (status, at_ms) in order.
+    pub fn history(&self, plan_id: &str) -> Result<Vec<(shift_proto::PlanStatus, u64)>> {
+        let txn = self.db.begin_read()?;
+        let t = txn.open_table(TRANSITIONS)?;
+        let mut out = Vec::new();
+        for item in t.range((plan_id, 0)..=(plan_id, u32::MAX))? {
+            let (_, v) = item?;
+            let tr: Transition = decode("transition", plan_id, v.value())?;
+            out.push((tr.status, tr.at_ms));
+        }
+        Ok(out)
+    }
+
+    fn all<T: DeserializeOwned>(&self, def: TableDefinition<'_, &str, &[u8]>, what: &str) -> Result<Vec<T>> {
+        let txn = self.db.begin_read()?;
+        let t = txn.open_table(def)?;
+        let mut out = Vec::new();
+        for item in t.iter()? {
+            let (k, v) = item?;
+            out.push(decode(what, k.value(), v.value())?);
+        }
+        Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use shift_engine::MapSource;
+    use shift_proto::{PlanRequest, PlanStatus, RobotSpec};
+
+    use super::*;
+
+    fn record(id: &str, status: PlanStatus, at: u64) -> PlanRecord {
+        PlanRecord {
+            plan_id: id.into(),
+            seq: 1,
+            request: PlanRequest {
+                site: "s".into(),
+                start: [0.0, 0.0],
+                robot: RobotSpec {
+                    radius: 0.1,
+                    tool_width: 0.2,
+                    v_min: 0.1,
+                    v_max: 1.0,
+                    a_max: 0.5,
+                },
+                attribute: None,
+                region: None,
+                options: None,
+            },
+            status,
+            progress: 0.0,
+            version: 0,
+            regions_ready: 0,
+            metrics: None,
+            error: None,
+            warnings: vec![],
+            attempts: 0,
+            created_ms: 0,
+            updated_ms: at,
+        }
+    }
+
+    #[test]
+    fn records_survive_reopening_and_history_keeps_transitions() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        {
+            let store = Store::open(dir.path()).expect("open");
+            store
+                .put_site(&SiteRecord {
+                    site: "s".into(),
+                    source: MapSource::Json { text: "{}".into() },
+                    updated_ms: 5,
+                })
+                .expect("site");
+            store.put_plan(&record("p-1", PlanStatus::Queued, 1)).expect("queued");
+            store
+                .put_plan(&record("p-1", PlanStatus::Queued, 2))
+                .expect("same status");
+            store
+                .put_plan(&record("p-1", PlanStatus::Planning, 3))
+                .expect("planning");
+            store
+                .put_plan(&record("p-10", PlanStatus::Queued, 4))
+                .expect("other plan");
+        }
+        let store = Store::open(dir.path()).expect("reopen");
+        assert_eq!(store.sites().expect("sites").len(), 1);
+        let plans = store.plans().expect("plans");
+        assert_eq!(plans.len(), 2);
+        assert_eq!(
+            store.history("p-1").expect("history"),
+            vec![(PlanStatus::Queued, 1), (PlanStatus::Planning, 3)]
+        );
+        assert_eq!(store.history("p-10").expect("history").len(), 1);
+        assert!(store.result("p-1").expect("read").is_none());
+    }
+}

@@ -1,0 +1,67 @@
+//! The read model: what HTTP handlers answer from without asking the engine thread. Only the engine thread
+//! writes it (after the store committed), handlers take short read locks and clone `Arc`s.
+
+use std::collections::{BTreeMap, HashMap};
+use std::sync::{Arc, RwLock};
+
+use shift_engine::PlanRecord;
+use shift_proto::{PlanDocument, SiteSummary};
+
+/// One plan as the API shows it.
+#[derive(Debug, Clone)]
+pub struct PlanView {
+    /// The record (status, progress, metrics…).
+    pub record: Arc<PlanRecord>,
+    /// The current plan document once computed.
+    pub doc: Option<Arc<PlanDocument>>,
+}
+
+/// Snapshots of plans and sites.
+#[derive(Debug, Default)]
+pub struct Views {
+    plans: RwLock<HashMap<String, PlanView>>,
+    sites: RwLock<BTreeMap<String, SiteSummary>>,
+}
+
+impl Views {
+    /// A plan's view.
+    pub fn plan(&self, plan_id: &str) -> Option<PlanView> {
+        self.plans.read().ok()?.get(plan_id).cloned()
+    }
+
+    /// A site's summary.
+    pub fn site(&self, site: &str) -> Option<SiteSummary> {
+        self.sites.read().ok()?.get(site).cloned()
+    }
+
+    /// Sets a plan's record, keeping its document.
+    pub fn set_record(&self, rec: PlanRecord) {
+        if let Ok(mut plans) = self.plans.write() {
+            let id = rec.plan_id.clone();
+            let doc = plans.get(&id).and_then(|v| v.doc.clone());
+            plans.insert(
+                id,
+                PlanView {
+                    record: Arc::new(rec),
+                    doc,
+                },
+            );
+        }
+    }
+
+    /// Sets a plan's document (the record follows in the same engine step).
+    pub fn set_doc(&self, plan_id: &str, doc: Arc<PlanDocument>) {
+        if let Ok(mut plans) = self.plans.write()
+            && let Some(v) = plans.get_mut(plan_id)
+        {
+            v.doc = Some(doc);
+        }
+    }
+
+    /// Sets a site's summary.
+    pub fn set_site(&self, summary: SiteSummary) {
+        if let Ok(mut sites) = self.sites.write() {
+            sites.insert(summary.site.clone(), summary);
+        }
+    }
+}

@@ -1,0 +1,20 @@
+//! # shift-engine
+//!
+//! The fleet brain, sans-IO: sites (their maps), plans (status, progress, versions, results) and the plan job
+//! queue. [`Engine::handle`] takes an [`Event`] and the current time and returns the [`Command`]s the daemon
+//! must carry out, in order (persist first, then start jobs, then publish). Plan computation is requested as
+//! [`Command::StartJob`] and its result comes back as [`Event::JobFinished`], so a test or a recording can drive
+//! the engine deterministically. No tokio, no sockets, no clock.
+
+mod engine;
+pub mod error;
+pub mod job;
+pub mod plan;
+pub mod request;
+pub mod site;
+
+pub use engine::{Command, Engine, EngineConfig, Event, JobOutcome};
+pub use error::EngineError;
+pub use job::{PlanJob, run_job};
+pub use plan::PlanRecord;
+pub use site::{MapSource, SiteMap, SiteRecord};

@@ -1,0 +1,54 @@
+//! The record the engine keeps (and the store persists) per plan.
+
+use serde::{Deserialize, Serialize};
+use shift_proto::{PlanMetricsDoc, PlanRequest, PlanStatus, PlanStatusResponse};
+
+/// One plan's state. Every status change is persisted as a whole record.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PlanRecord {
+    /// Plan id (`p-…`).
+    pub plan_id: String,
+    /// Acceptance order; ids and queue order come from it.
+    pub seq: u64,
+    /// The request as accepted.
+    pub request: PlanRequest,
+    /// Lifecycle state.
+    pub status: PlanStatus,
+    /// Fraction computed, 0–1.
+    pub progress: f64,
+    /// Current version (0 until computed, 1 when ready, +1 per correction).
+    pub version: u64,
+    /// Regions whose cover paths are ready.
+    pub regions_ready: u32,
+    /// Figures of merit once ready.
+    pub metrics: Option<PlanMetricsDoc>,
+    /// Why it failed.
+    pub error: Option<String>,
+    /// Planner remarks and lifecycle notes (e.g. "re-queued after a restart").
+    pub warnings: Vec<String>,
+    /// How many times a worker started it.
+    pub attempts: u32,
+    /// Accepted at, milliseconds since the Unix epoch.
+    pub created_ms: u64,
+    /// Last change, milliseconds since the Unix epoch.
+    pub updated_ms: u64,
+}
+
+impl PlanRecord {
+    /// The `GET /v1/plans/{id}` body.
+    pub fn to_response(&self) -> PlanStatusResponse {
+        PlanStatusResponse {
+            plan_id: self.plan_id.clone(),
+            site: self.request.site.clone(),
+            status: self.status,
+            progress: self.progress,
+            version: self.version,
+            regions_ready: self.regions_ready,
+            metrics: self.metrics,
+            error: self.error.clone(),
+            warnings: self.warnings.clone(),
+            created_ms: self.created_ms,
+            updated_ms: self.updated_ms,
+        }
+    }
+}

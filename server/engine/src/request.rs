@@ -1,0 +1,215 @@
+//! Checking a plan request against its site before it is accepted: every number finite and in range, the
+//! start on the map, options that name real strategies. A request that passes here can still fail in the job
+//! (an unreachable start, say), but never for a reason a client could have been told at once.
+
+use shift_planner::decompose::DecompositionMethod;
+use shift_planner::geom::Point2;
+use shift_planner::map::grid::OccupancyGrid;
+use shift_planner::order::OrderMethod;
+use shift_planner::pattern::PatternMethod;
+use shift_proto::PlanRequest;
+
+use crate::error::{EngineError, Result};
+
+/// The planner's choices parsed from [`shift_proto::PlanOptions`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ParsedOptions {
+    /// Decomposition strategy.
+    pub decomposition: DecompositionMethod,
+    /// Visiting-order solver.
+    pub order: OrderMethod,
+    /// In-region pattern.
+    pub pattern: PatternMethod,
+    /// Seed.
+    pub seed: u64,
+}
+
+fn invalid(msg: String) -> EngineError {
+    EngineError::InvalidRequest(msg)
+}
+
+fn finite(name: &str, v: f64) -> Result<f64> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(invalid(format!("{name} must be a finite number, got {v}")))
+    }
+}
+
+fn positive(name: &str, v: f64) -> Result<f64> {
+    if finite(name, v)? > 0.0 {
+        Ok(v)
+    } else {
+        Err(invalid(format!("{name} must be positive, got {v}")))
+    }
+}
+
+/// Parses the options, defaulting each absent field to the best combination.
+pub fn parse_options(req: &PlanRequest) -> Result<ParsedOptions> {
+    let o = req.options.clone().unwrap_or_default();
+    let decomposition = match o.decomposition.as_deref() {
+        None => DecompositionMethod::Auto,
+        Some(s) => s
+            .parse()
+            .map_err(|e: String| invalid(format!("options.decomposition: {e}")))?,
+    };
+    let order = match o.order.as_deref() {
+        None => OrderMethod::TwoOpt,
+        Some(s) => s.parse().map_err(|e: String| invalid(format!("options.order: {e}")))?,
+    };
+    let pattern = match o.pattern.as_deref() {
+        None => PatternMethod::Lanes,
+        Some(s) => s
+            .parse()
+            .map_err(|e: String| invalid(format!("options.pattern: {e}")))?,
+    };
+    Ok(ParsedOptions {
+        decomposition,
+        order,
+        pattern,
+        seed: o.seed.unwrap_or(1),
+    })
+}
+
+/// Validates a request against the site's grid.
+pub fn validate(req: &PlanRequest, grid: &OccupancyGrid) -> Result<ParsedOptions> {
+    let r = &req.robot;
+    positive("robot.radius", r.radius)?;
+    positive("robot.tool_width", r.tool_width)?;
+    positive("robot.v_min", r.v_min)?;
+    positive("robot.v_max", r.v_max)?;
+    positive("robot.a_max", r.a_max)?;
+    if r.v_min > r.v_max {
+        return Err(invalid(format!(
+            "robot.v_min {} exceeds robot.v_max {}",
+            r.v_min, r.v_max
+        )));
+    }
+    let start = Point2::new(finite("start[0]", req.start[0])?, finite("start[1]", req.start[1])?);
+    let g = &grid.geometry;
+    if g.locate(start).is_none() {
+        let (x1, y1) = (
+            g.origin.x + g.width as f64 * g.resolution,
+            g.origin.y + g.height as f64 * g.resolution,
+        );
+        return Err(invalid(format!(
+            "start ({}, {}) is outside the map [{}, {}] × [{}, {}]",
+            start.x, start.y, g.origin.x, x1, g.origin.y, y1
+        )));
+    }
+    if let Some(a) = &req.attribute {
+        for (i, b) in a.blobs.iter().enumerate() {
+            finite(&format!("attribute.blobs[{i}].x"), b.x)?;
+            finite(&format!("attribute.blobs[{i}].y"), b.y)?;
+            positive(&format!("attribute.blobs[{i}].sigma"), b.sigma)?;
+            let amp = finite(&format!("attribute.blobs[{i}].amplitude"), b.amplitude)?;
+            if !(0.0..=1.0).contains(&amp) {
+                return Err(invalid(format!(
+                    "attribute.blobs[{i}].amplitude must be in [0, 1], got {amp}"
+                )));
+            }
+        }
+    }
+    if let Some(poly) = &req.region {
+        if poly.len() < 3 {
+            return Err(invalid(format!("region needs at least 3 vertices, got {}", poly.len())));
+        }
+        for (i, p) in poly.iter().enumerate() {
+            finite(&format!("region[{i}][0]"), p[0])?;
+            finite(&format!("region[{i}][1]"), p[1])?;
+        }
+        if !point_in_polygon(start, poly) {
+            return Err(invalid(format!(
+                "start ({}, {}) must lie inside the region polygon (the plan stays inside it)",
+                start.x, start.y
+            )));
+        }
+    }
+    parse_options(req)
+}
+
+/// Even-odd point-in-polygon test; `poly` is `[[x, y], …]`, implicitly closed.
+pub fn point_in_polygon(p: Point2, poly: &[[f64; 2]]) -> bool {
+    let mut inside = false;
+    let n = poly.len();
+    for i in 0..n {
+        let [xi, yi] = poly[i];
+        let [xj, yj] = poly[(i + n - 1) % n];
+        if (yi > p.y) != (yj > p.y) && p.x < (xj - xi) * (p.y - yi) / (yj - yi) + xi {
+            inside = !inside;
+        }
+    }
+    inside
+}
+
+#[cfg(test)]
+mod tests {
+    use shift_planner::map::grid::{CellState, GridGeometry};
+    use shift_proto::{PlanOptions, RobotSpec};
+
+    use super::*;
+
+    fn grid() -> OccupancyGrid {
+        let g = GridGeometry::new(40, 40, 0.1, Point2::new(0.0, 0.0)).expect("geometry");
+        OccupancyGrid::filled(g, CellState::Free)
+    }
+
+    fn request() -> PlanRequest {
+        PlanRequest {
+            site: "s".into(),
+            start: [1.0, 1.0],
+            robot: RobotSpec {
+                radius: 0.15,
+                tool_width: 0.3,
+                v_min: 0.1,
+                v_max: 1.0,
+                a_max: 0.5,
+            },
+            attribute: None,
+            region: None,
+            options: None,
+        }
+    }
+
+    #[test]
+    fn good_request_gets_defaults() {
+        let o = validate(&request(), &grid()).expect("valid");
+        assert_eq!(o.decomposition, DecompositionMethod::Auto);
+        assert_eq!(o.seed, 1);
+    }
+
+    #[test]
+    fn bad_numbers_and_names_are_refused() {
+        let g = grid();
+        let mut r = request();
+        r.robot.radius = f64::NAN;
+        assert!(validate(&r, &g).is_err());
+        let mut r = request();
+        r.robot.radius = -0.1;
+        assert!(validate(&r, &g).is_err());
+        let mut r = request();
+        r.start = [10.0, 1.0];
+        let e = validate(&r, &g).expect_err("outside");
+        assert!(e.to_string().contains("outside the map"), "{e}");
+        let mut r = request();
+        r.robot.v_min = 2.0;
+        assert!(validate(&r, &g).is_err());
+        let mut r = request();
+        r.options = Some(PlanOptions {
+            decomposition: Some("magic".into()),
+            ..PlanOptions::default()
+        });
+        assert!(validate(&r, &g).is_err());
+        let mut r = request();
+        r.region = Some(vec![[2.0, 2.0], [3.0, 2.0], [3.0, 3.0]]);
+        assert!(validate(&r, &g).is_err(), "start outside the region");
+    }
+
+    #[test]
+    fn polygon_test_matches_a_square() {
+        let sq = [[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [0.0, 2.0]];
+        assert!(point_in_polygon(Point2::new(1.0, 1.0), &sq));
+        assert!(!point_in_polygon(Point2::new(3.0, 1.0), &sq));
+        assert!(!point_in_polygon(Point2::new(-0.1, 1.9), &sq));
+    }
+}

@@ -1,0 +1,188 @@
+//! Sites: a named map the plans of that site are computed on.
+//!
+//! A site keeps the bytes it was uploaded as ([`MapSource`]) so the store can persist exactly what the client
+//! sent and a restart re-reads it with the same code, plus the parsed grid shared by every plan job.
+
+use std::sync::Arc;
+
+use serde::{Deserialize, Serialize};
+use shift_planner::map::grid::OccupancyGrid;
+use shift_planner::map::json_grid::JsonGrid;
+use shift_planner::map::ros::{MapYaml, grid_from_image};
+use shift_proto::SiteSummary;
+
+use crate::error::{EngineError, Result};
+
+/// A map as uploaded: map_server YAML + image bytes, or a JSON grid (DESIGN §5.3).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum MapSource {
+    /// map_server YAML text and the PGM/PNG bytes it describes (the YAML's `image` name is ignored).
+    Ros {
+        /// YAML text.
+        yaml: String,
+        /// Image bytes.
+        #[serde(with = "bytes_as_hex")]
+        image: Vec<u8>,
+    },
+    /// nav_msgs/OccupancyGrid-shaped JSON text.
+    Json {
+        /// JSON text.
+        text: String,
+    },
+}
+
+/// A parsed site map.
+#[derive(Debug, Clone)]
+pub struct SiteMap {
+    /// The thresholded grid, shared with running jobs.
+    pub grid: Arc<OccupancyGrid>,
+    /// Remarks from reading it.
+    pub warnings: Vec<String>,
+}
+
+impl MapSource {
+    /// Parses and validates the map (pure; may take a while on large images, so callers run it off the
+    /// async workers).
+    pub fn parse(&self) -> Result<SiteMap> {
+        match self {
+            Self::Ros { yaml, image } => {
+                let y = MapYaml::parse(yaml)?;
+                let loaded = grid_from_image(&y, image)?;
+                Ok(SiteMap {
+                    grid: Arc::new(loaded.grid),
+                    warnings: loaded.warnings,
+                })
+            }
+            Self::Json { text } => {
+                let grid = JsonGrid::parse(text)?.into_grid()?;
+                Ok(SiteMap {
+                    grid: Arc::new(grid),
+                    warnings: Vec::new(),
+                })
+            }
+        }
+    }
+}
+
+/// What the store keeps per site.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SiteRecord {
+    /// Site name.
+    pub site: String,
+    /// The map as uploaded.
+    pub source: MapSource,
+    /// Upload time, milliseconds since the Unix epoch.
+    pub updated_ms: u64,
+}
+
+/// A site held by the engine.
+#[derive(Debug, Clone)]
+pub(crate) struct Site {
+    pub record: SiteRecord,
+    pub map: SiteMap,
+}
+
+impl Site {
+    pub fn summary(&self) -> SiteSummary {
+        let g = self.map.grid.geometry;
+        SiteSummary {
+            site: self.record.site.clone(),
+            width: g.width as u64,
+            height: g.height as u64,
+            resolution: g.resolution,
+            origin: [g.origin.x, g.origin.y],
+            free_cells: self.map.grid.free_count() as u64,
+            points_in_tree: 0,
+            updated_ms: self.record.updated_ms,
+            warnings: self.map.warnings.clone(),
+        }
+    }
+}
+
+/// Checks a site name: 1–64 characters of `[A-Za-z0-9_-]` (it becomes part of URLs and Zenoh keys).
+pub fn validate_site_name(name: &str) -> Result<()> {
+    let ok = !name.is_empty()
+        && name.len() <= 64
+        && name
+            .bytes()
+            .all(|b| b.is_ascii_alphanumeric() || b == b'-' || b == b'_');
+    if ok {
+        Ok(())
+    } else {
+        Err(EngineError::InvalidRequest(format!(
+            "site name {name:?} must be 1-64 characters of letters, digits, '-' or '_'"
+        )))
+    }
+}
+
+/// Image bytes as a hex string in the JSON the store keeps (compact enough for maps, dependency-free).
+mod bytes_as_hex {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(bytes: &[u8], s: S) -> Result<S::Ok, S::Error> {
+        const HEX: &[u8; 16] = b"0123456789abcdef";
+        let mut out = String::with_capacity(bytes.len() * 2);
+        for b in bytes {
+            out.push(char::from(HEX[usize::from(b >> 4)]));
+            out.push(char::from(HEX[usize::from(b & 15)]));
+        }
+        s.serialize_str(&out)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<u8>, D::Error> {
+        let text = String::deserialize(d)?;
+        let digit = |c: u8| match c {
+            b'0'..=b'9' => Ok(c - b'0'),
+            b'a'..=b'f' => Ok(c - b'a' + 10),
+            _ => Err(serde::de::Error::custom("invalid hex digit")),
+        };
+        let raw = text.as_bytes();
+        if raw.len() % 2 != 0 {
+            return Err(serde::de::Error::custom("odd hex length"));
+        }
+        raw.chunks_exact(2)
+            .map(|p| Ok(digit(p[0])? << 4 | digit(p[1])?))
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn json_source_parses_and_round_trips() {
+        let text = r#"{"resolution": 0.5, "origin": [0, 0], "width": 2, "height": 2, "cells": [0, 0, 100, -1]}"#;
+        let src = MapSource::Json { text: text.into() };
+        let map = src.parse().expect("valid grid");
+        assert_eq!(map.grid.free_count(), 2);
+        let ros = MapSource::Ros {
+            yaml: "image: m.pgm".into(),
+            image: vec![0, 1, 0xab, 0xff],
+        };
+        let back: MapSource = serde_json::from_str(&serde_json::to_string(&ros).expect("ser")).expect("de");
+        assert_eq!(back, ros);
+    }
+
+    #[test]
+    fn bad_maps_are_errors() {
+        let src = MapSource::Json {
+            text: r#"{"resolution": 0, "origin": [0, 0], "width": 1, "height": 1, "cells": [0]}"#.into(),
+        };
+        assert!(matches!(src.parse(), Err(EngineError::Map(_))));
+        let src = MapSource::Ros {
+            yaml: "image: m.pgm\nresolution: 0.1\norigin: [0, 0, 0]".into(),
+            image: b"not an image".to_vec(),
+        };
+        assert!(src.parse().is_err());
+    }
+
+    #[test]
+    fn site_names_are_checked() {
+        assert!(validate_site_name("demo-1_a").is_ok());
+        assert!(validate_site_name("").is_err());
+        assert!(validate_site_name("a/b").is_err());
+        assert!(validate_site_name(&"x".repeat(65)).is_err());
+    }
+}
