@@ -109,11 +109,19 @@ fn parse_xy(s: &str) -> Result<Point2, String> {
 }
 
 fn main() -> ExitCode {
+    let cli = Cli::parse();
+    // The service logs its life at info; the one-shot commands only warnings. RUST_LOG overrides both.
+    let default_filter = match cli.command {
+        Command::Serve(_) => "info,tower_http=warn",
+        _ => "warn",
+    };
     tracing_subscriber::fmt()
-        .with_env_filter(tracing_subscriber::EnvFilter::from_default_env())
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env()
+                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(default_filter)),
+        )
         .with_writer(std::io::stderr)
         .init();
-    let cli = Cli::parse();
     let result = match cli.command {
         Command::Serve(args) => cmd_serve(args),
         Command::Plan(args) => cmd_plan(args),
@@ -130,12 +138,6 @@ fn main() -> ExitCode {
 }
 
 fn cmd_serve(args: ServeArgs) -> Result<()> {
-    tracing_subscriber::fmt()
-        .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env()
-                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info,tower_http=warn")),
-        )
-        .init();
     let mut config = match &args.config {
         Some(path) => shiftd::Config::load(path)?,
         None => shiftd::Config::default(),
