@@ -222,10 +222,63 @@ pub struct PlanStatusResponse {
     /// Remarks from the planner (e.g. a start snapped out of an obstacle).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
+    /// Robot driving it (once assigned).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub robot: Option<String>,
+    /// Fraction of the path's length the robot has driven, 0–1 (once assigned).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub driven_fraction: Option<f64>,
     /// When the request was accepted, milliseconds since the Unix epoch.
     pub created_ms: u64,
     /// Last status change, milliseconds since the Unix epoch.
     pub updated_ms: u64,
+}
+
+/// `POST /v1/plans/{id}/assign`.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+#[serde(deny_unknown_fields)]
+pub struct AssignRequest {
+    /// Robot id (as in its Zenoh keys).
+    pub robot: String,
+}
+
+/// A robot's last pose, map frame.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct PoseView {
+    /// x, metres.
+    pub x: f64,
+    /// y, metres.
+    pub y: f64,
+    /// Heading, radians, counter-clockwise from +x.
+    pub yaw: f64,
+    /// Stamp of the odometry it came from, nanoseconds (robot clock).
+    pub stamp_ns: i64,
+}
+
+/// `GET /v1/robots/{id}` (and the items of `GET /v1/robots`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct RobotView {
+    /// Robot id.
+    pub robot: String,
+    /// Its liveliness token is present (false = lost).
+    pub alive: bool,
+    /// Last message or liveliness change, milliseconds since the Unix epoch.
+    pub last_seen_ms: u64,
+    /// Last pose.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pose: Option<PoseView>,
+    /// Plan it drives.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub plan_id: Option<String>,
+    /// Fraction of that plan's length driven, 0–1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub driven_fraction: Option<f64>,
+    /// Metres of that plan driven.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub driven_m: Option<f64>,
 }
 
 /// One point of `GET /v1/plans/{id}/speed-profile`.
@@ -270,6 +323,12 @@ pub struct SiteSummary {
     pub free_cells: u64,
     /// Points in the live ikd-tree (0 until robots stream clouds).
     pub points_in_tree: u64,
+    /// Clouds ingested per second over the last 10 s.
+    #[serde(default)]
+    pub updates_per_s: f64,
+    /// Clouds dropped (queue overflow, malformed payloads, no pose to transform with).
+    #[serde(default)]
+    pub dropped_clouds: u64,
     /// Last map change, milliseconds since the Unix epoch.
     pub updated_ms: u64,
     /// Remarks from reading the map.

@@ -8,8 +8,8 @@ pub mod plan;
 pub mod scene;
 
 pub use api::{
-    AttributeBlob, AttributeSpec, ErrorBody, ErrorDetail, PlanAccepted, PlanEvent, PlanOptions, PlanRequest,
-    PlanStatus, PlanStatusResponse, RegionReady, RobotSpec, SiteSummary, SpeedProfileResponse, SpeedSample,
+    AssignRequest, AttributeBlob, AttributeSpec, ErrorBody, ErrorDetail, PlanAccepted, PlanEvent, PlanOptions, PlanRequest,
+    PlanStatus, PlanStatusResponse, RegionReady, RobotSpec, RobotView, PoseView, SiteSummary, SpeedProfileResponse, SpeedSample,
 };
 pub use plan::{PlanDocument, PlanMetricsDoc, RegionDoc, WaypointDoc, WaypointKindDoc};
 pub use scene::SceneFile;

@@ -31,6 +31,8 @@ pub fn test_config(data_dir: &Path) -> Config {
     c.jobs.workers = 1;
     c.jobs.queue_capacity = 8;
     c.jobs.shutdown_grace_s = 0;
+    // In-process Zenoh only: parallel test servers must not fight over port 7447.
+    c.zenoh.listen = Vec::new();
     c
 }
 

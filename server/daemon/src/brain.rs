@@ -9,6 +9,7 @@ use shift_engine::{Command, Engine, EngineError, Event, PlanRecord};
 use shift_proto::{PlanEvent, SiteSummary};
 use tokio::sync::{broadcast, mpsc, oneshot, watch};
 
+use crate::fleet::PlanPublisher;
 use crate::jobs::JobRunner;
 use crate::store::Store;
 use crate::views::Views;
@@ -91,6 +92,11 @@ impl BrainHandle {
         self.tx.send(msg).await.map_err(|_| BrainError::Stopped)
     }
 
+    /// Sends without waiting for room; fails when the inbox is full (callers drop lossy data then).
+    pub fn try_tell(&self, msg: Msg) -> Result<(), BrainError> {
+        self.tx.try_send(msg).map_err(|_| BrainError::Stopped)
+    }
+
     /// Watches the number of running jobs.
     pub fn running(&self) -> watch::Receiver<usize> {
         self.running.clone()
@@ -120,6 +126,7 @@ pub fn spawn(
     store: Arc<Store>,
     views: Arc<Views>,
     events: broadcast::Sender<PlanEvent>,
+    publisher: Option<PlanPublisher>,
     runtime: tokio::runtime::Handle,
 ) -> std::io::Result<(BrainHandle, std::thread::JoinHandle<()>)> {
     let (tx, rx) = mpsc::channel(INBOX);
@@ -131,6 +138,7 @@ pub fn spawn(
         views,
         events,
         jobs,
+        publisher,
         running: running_tx,
     };
     let thread = std::thread::Builder::new()
@@ -151,6 +159,7 @@ struct Brain {
     views: Arc<Views>,
     events: broadcast::Sender<PlanEvent>,
     jobs: JobRunner,
+    publisher: Option<PlanPublisher>,
     running: watch::Sender<usize>,
 }
 
@@ -212,6 +221,11 @@ impl Brain {
                 }
                 Command::StartJob(job) => self.jobs.start(job),
                 Command::CancelJob { plan_id } => self.jobs.cancel(&plan_id),
+                Command::PublishPlan { robot, doc } => match &self.publisher {
+                    Some(p) => p.publish(&robot, doc),
+                    None => tracing::warn!(robot, "zenoh is disabled: the plan is only served over HTTP"),
+                },
+                Command::RobotChanged(view) => self.views.set_robot(view),
                 Command::Publish(event) => {
                     // No subscriber is not an error.
                     let _ = self.events.send(event);

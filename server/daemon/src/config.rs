@@ -19,6 +19,8 @@ pub struct Config {
     pub jobs: JobsConfig,
     /// The bundled demo site.
     pub demo: DemoConfig,
+    /// The fleet over Zenoh.
+    pub zenoh: crate::fleet::config::ZenohConfig,
 }
 
 /// `[http]`.

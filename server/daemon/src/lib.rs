@@ -7,6 +7,7 @@
 pub mod brain;
 pub mod config;
 pub mod eval;
+pub mod fleet;
 pub mod http;
 pub mod jobs;
 pub mod plan_doc;

@@ -46,6 +46,12 @@ struct ServeArgs {
     /// TOML config file (see deploy/shiftd.toml); embedded defaults without it.
     #[arg(long)]
     config: Option<PathBuf>,
+    /// Zenoh endpoint to listen on (repeatable; replaces [zenoh] listen), e.g. tcp/127.0.0.1:7447.
+    #[arg(long)]
+    zenoh_listen: Vec<String>,
+    /// Zenoh endpoint to connect to (repeatable; replaces [zenoh] connect), e.g. tcp/10.0.0.5:7447.
+    #[arg(long)]
+    zenoh_connect: Vec<String>,
 }
 
 #[derive(clap::Args)]
@@ -147,6 +153,12 @@ fn cmd_serve(args: ServeArgs) -> Result<()> {
     }
     if let Some(dir) = args.data_dir {
         config.store.data_dir = dir;
+    }
+    if !args.zenoh_listen.is_empty() {
+        config.zenoh.listen = args.zenoh_listen;
+    }
+    if !args.zenoh_connect.is_empty() {
+        config.zenoh.connect = args.zenoh_connect;
     }
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .enable_all()

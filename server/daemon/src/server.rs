@@ -18,6 +18,8 @@ use tokio_util::sync::CancellationToken;
 
 use crate::brain::{self, BrainHandle, Msg, now_ms};
 use crate::config::Config;
+use crate::fleet::live::LiveMaps;
+use crate::fleet::{self, Fleet};
 use crate::http::{AppState, router};
 use crate::store::Store;
 use crate::views::Views;
@@ -57,20 +59,37 @@ pub async fn run(
         workers: config.jobs.effective_workers(),
         queue_capacity: config.jobs.queue_capacity,
     });
+    let zenoh = if config.zenoh.enabled {
+        Some(fleet::open(&config.zenoh).await?)
+    } else {
+        None
+    };
+    let publisher = zenoh.as_ref().map(|(s, k)| fleet::publisher(s, k));
     let (brain, engine_thread) = brain::spawn(
         engine,
         store.clone(),
         views.clone(),
         events.clone(),
+        publisher,
         tokio::runtime::Handle::current(),
     )
     .context("starting the engine thread")?;
     restore(&config, &store, &views, &brain).await?;
+    let live = Arc::new(LiveMaps::default());
+    let fleet = match zenoh {
+        Some((session, keys)) => Some(
+            Fleet::start(&config.zenoh, session, keys, brain.clone(), views.clone(), live.clone())
+                .await
+                .context("starting the Zenoh fleet bridge")?,
+        ),
+        None => None,
+    };
 
     let token = CancellationToken::new();
     let state = AppState {
         brain: brain.clone(),
         views,
+        live,
         events,
         shutdown: token.clone(),
         prometheus,
@@ -89,6 +108,9 @@ pub async fn run(
         .await
         .context("serving HTTP")?;
 
+    if let Some(f) = fleet {
+        f.shutdown().await;
+    }
     tracing::info!("draining plan jobs");
     brain.call(Event::Shutdown).await.ok();
     let mut running = brain.running();

@@ -174,6 +174,8 @@ mod tests {
             metrics: None,
             error: None,
             warnings: vec![],
+            robot: None,
+            driven_fraction: 0.0,
             attempts: 0,
             created_ms: 0,
             updated_ms: at,

@@ -5,7 +5,7 @@ use std::collections::{BTreeMap, HashMap};
 use std::sync::{Arc, RwLock};
 
 use shift_engine::PlanRecord;
-use shift_proto::{PlanDocument, SiteSummary};
+use shift_proto::{PlanDocument, RobotView, SiteSummary};
 
 /// One plan as the API shows it.
 #[derive(Debug, Clone)]
@@ -21,6 +21,7 @@ pub struct PlanView {
 pub struct Views {
     plans: RwLock<HashMap<String, PlanView>>,
     sites: RwLock<BTreeMap<String, SiteSummary>>,
+    robots: RwLock<BTreeMap<String, RobotView>>,
 }
 
 impl Views {
@@ -55,6 +56,29 @@ impl Views {
             && let Some(v) = plans.get_mut(plan_id)
         {
             v.doc = Some(doc);
+        }
+    }
+
+    /// A robot's view.
+    pub fn robot(&self, robot: &str) -> Option<RobotView> {
+        self.robots.read().ok()?.get(robot).cloned()
+    }
+
+    /// Every robot.
+    pub fn robots(&self) -> Vec<RobotView> {
+        self.robots.read().map(|r| r.values().cloned().collect()).unwrap_or_default()
+    }
+
+    /// The document of the plan a robot drives.
+    pub fn robot_plan(&self, robot: &str) -> Option<Arc<PlanDocument>> {
+        let plan_id = self.robot(robot)?.plan_id?;
+        self.plan(&plan_id)?.doc
+    }
+
+    /// Sets a robot's view.
+    pub fn set_robot(&self, view: RobotView) {
+        if let Ok(mut robots) = self.robots.write() {
+            robots.insert(view.robot.clone(), view);
         }
     }
 

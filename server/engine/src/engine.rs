@@ -3,13 +3,14 @@
 use std::collections::{BTreeMap, HashMap, HashSet, VecDeque};
 use std::sync::Arc;
 
-use shift_proto::{PlanDocument, PlanEvent, PlanRequest, PlanStatus, RegionReady, SiteSummary};
+use shift_proto::{PlanDocument, PlanEvent, PlanRequest, PlanStatus, PoseView, RegionReady, RobotView, SiteSummary};
 
 use crate::error::{EngineError, Result};
 use crate::job::PlanJob;
 use crate::plan::PlanRecord;
 use crate::request::validate;
-use crate::site::{Site, SiteMap, SiteRecord, validate_site_name};
+use crate::robots::{Assignment, Pose2, Robot, Robots};
+use crate::site::{Site, SiteMap, SiteRecord, validate_name, validate_site_name};
 
 /// Sizes of the job machinery.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -87,6 +88,29 @@ pub enum Event {
         /// How.
         outcome: JobOutcome,
     },
+    /// A robot's liveliness token appeared (`alive`) or disappeared.
+    RobotLiveliness {
+        /// Robot id.
+        robot: String,
+        /// Token present.
+        alive: bool,
+    },
+    /// A robot's odometry, map frame.
+    RobotPose {
+        /// Robot id.
+        robot: String,
+        /// Its pose.
+        pose: Pose2,
+    },
+    /// A client assigns a ready plan to a robot (the daemon attaches the current document).
+    AssignPlan {
+        /// Plan id.
+        plan_id: String,
+        /// Robot id.
+        robot: String,
+        /// The plan's current document.
+        doc: Arc<PlanDocument>,
+    },
     /// The daemon is stopping: start no more jobs, refuse new plans.
     Shutdown,
 }
@@ -118,6 +142,37 @@ pub enum Command {
     },
     /// Send to event subscribers.
     Publish(PlanEvent),
+    /// Deliver a plan to a robot (its plan key, the ROS Path key; the queryable serves it from now on).
+    PublishPlan {
+        /// Robot id.
+        robot: String,
+        /// The plan.
+        doc: Arc<PlanDocument>,
+    },
+    /// The read model's robot view changed.
+    RobotChanged(RobotView),
+}
+
+/// Odometry within this distance of a waypoint counts as reaching it, metres.
+const REACH_TOLERANCE_M: f64 = 0.5;
+/// Waypoints searched ahead of the last one reached.
+const REACH_WINDOW: usize = 200;
+
+fn robot_view(r: &Robot) -> RobotView {
+    RobotView {
+        robot: r.id.clone(),
+        alive: r.alive,
+        last_seen_ms: r.last_seen_ms,
+        pose: r.pose.map(|p| PoseView {
+            x: p.x,
+            y: p.y,
+            yaw: p.yaw,
+            stamp_ns: p.stamp_ns,
+        }),
+        plan_id: r.assignment.as_ref().map(|a| a.plan_id.clone()),
+        driven_fraction: r.assignment.as_ref().map(Assignment::fraction),
+        driven_m: r.assignment.as_ref().map(Assignment::driven_m),
+    }
 }
 
 /// The fleet brain. See the crate docs.
@@ -128,6 +183,7 @@ pub struct Engine {
     plans: HashMap<String, PlanRecord>,
     queue: VecDeque<String>,
     running: HashSet<String>,
+    robots: Robots,
     next_seq: u64,
     draining: bool,
 }
@@ -175,6 +231,14 @@ impl Engine {
                 }
             }
             Event::JobFinished { plan_id, outcome } => self.finished(&plan_id, outcome, now_ms, &mut out),
+            Event::RobotLiveliness { robot, alive } => {
+                let r = self.robots.entry(&robot, now_ms);
+                r.alive = alive;
+                r.last_seen_ms = now_ms;
+                out.push(Command::RobotChanged(robot_view(r)));
+            }
+            Event::RobotPose { robot, pose } => self.pose(&robot, pose, now_ms, &mut out),
+            Event::AssignPlan { plan_id, robot, doc } => self.assign(&plan_id, &robot, doc, now_ms, &mut out)?,
             Event::Shutdown => self.draining = true,
         }
         self.pump(now_ms, &mut out);
@@ -189,6 +253,11 @@ impl Engine {
     /// A site's summary.
     pub fn site(&self, site: &str) -> Option<SiteSummary> {
         self.sites.get(site).map(Site::summary)
+    }
+
+    /// A robot's view.
+    pub fn robot(&self, id: &str) -> Option<RobotView> {
+        self.robots.get(id).map(robot_view)
     }
 
     /// Jobs waiting for a worker.
@@ -236,6 +305,8 @@ impl Engine {
             metrics: None,
             error: None,
             warnings: Vec::new(),
+            robot: None,
+            driven_fraction: 0.0,
             attempts: 0,
             created_ms: now_ms,
             updated_ms: now_ms,
@@ -245,6 +316,79 @@ impl Engine {
         out.push(Command::Publish(PlanEvent::Status(rec.to_response())));
         self.plans.insert(rec.plan_id.clone(), rec);
         Ok(())
+    }
+
+    fn assign(&mut self, plan_id: &str, robot: &str, doc: Arc<PlanDocument>, now_ms: u64, out: &mut Vec<Command>) -> Result<()> {
+        validate_name("robot", robot)?;
+        let rec = self
+            .plans
+            .get_mut(plan_id)
+            .ok_or_else(|| EngineError::UnknownPlan(plan_id.to_owned()))?;
+        if !matches!(rec.status, PlanStatus::Ready | PlanStatus::Active) {
+            return Err(EngineError::InvalidState {
+                plan_id: plan_id.to_owned(),
+                status: rec.status,
+                action: "assign",
+            });
+        }
+        // A plan drives one robot: re-assigning moves it.
+        if let Some(prev) = rec.robot.clone()
+            && prev != robot
+        {
+            let r = self.robots.entry(&prev, now_ms);
+            r.assignment = None;
+            out.push(Command::RobotChanged(robot_view(r)));
+        }
+        rec.status = PlanStatus::Active;
+        rec.robot = Some(robot.to_owned());
+        rec.driven_fraction = 0.0;
+        rec.updated_ms = now_ms;
+        out.push(Command::StorePlan(rec.clone()));
+        out.push(Command::Publish(PlanEvent::Status(rec.to_response())));
+        let r = self.robots.entry(robot, now_ms);
+        if let Some(old) = r.assignment.take()
+            && old.plan_id != plan_id
+            && let Some(old_rec) = self.plans.get_mut(&old.plan_id)
+            && old_rec.status == PlanStatus::Active
+        {
+            // The robot drops its previous plan; that plan is ready to be assigned again.
+            old_rec.status = PlanStatus::Ready;
+            old_rec.robot = None;
+            old_rec.updated_ms = now_ms;
+            out.push(Command::StorePlan(old_rec.clone()));
+            out.push(Command::Publish(PlanEvent::Status(old_rec.to_response())));
+        }
+        r.assignment = Some(Assignment::new(plan_id.to_owned(), doc.clone()));
+        out.push(Command::PublishPlan {
+            robot: robot.to_owned(),
+            doc,
+        });
+        out.push(Command::RobotChanged(robot_view(r)));
+        Ok(())
+    }
+
+    fn pose(&mut self, robot: &str, pose: Pose2, now_ms: u64, out: &mut Vec<Command>) {
+        if !(pose.x.is_finite() && pose.y.is_finite() && pose.yaw.is_finite()) {
+            return;
+        }
+        let r = self.robots.entry(robot, now_ms);
+        r.pose = Some(pose);
+        r.last_seen_ms = now_ms;
+        if let Some(a) = r.assignment.as_mut()
+            && a.advance(pose.x, pose.y, REACH_TOLERANCE_M, REACH_WINDOW)
+            && let Some(rec) = self.plans.get_mut(&a.plan_id)
+        {
+            rec.driven_fraction = a.fraction();
+            rec.updated_ms = now_ms;
+            if a.finished() && rec.status == PlanStatus::Active {
+                rec.status = PlanStatus::Done;
+                out.push(Command::StorePlan(rec.clone()));
+                out.push(Command::Publish(PlanEvent::Status(rec.to_response())));
+            } else {
+                out.push(Command::UpdatePlan(rec.clone()));
+            }
+        }
+        out.push(Command::RobotChanged(robot_view(r)));
     }
 
     fn cancel(&mut self, plan_id: &str, now_ms: u64, out: &mut Vec<Command>) -> Result<()> {

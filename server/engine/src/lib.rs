@@ -9,12 +9,16 @@
 mod engine;
 pub mod error;
 pub mod job;
+pub mod live_map;
 pub mod plan;
 pub mod request;
+pub mod robots;
 pub mod site;
 
 pub use engine::{Command, Engine, EngineConfig, Event, JobOutcome};
 pub use error::EngineError;
 pub use job::{PlanJob, run_job};
+pub use live_map::{LiveMap, LiveMapParams, LiveMapStats};
 pub use plan::PlanRecord;
+pub use robots::Pose2;
 pub use site::{MapSource, SiteMap, SiteRecord};

@@ -26,6 +26,12 @@ pub struct PlanRecord {
     pub error: Option<String>,
     /// Planner remarks and lifecycle notes (e.g. "re-queued after a restart").
     pub warnings: Vec<String>,
+    /// Robot it is assigned to.
+    #[serde(default)]
+    pub robot: Option<String>,
+    /// Fraction of its length that robot has driven, 0–1.
+    #[serde(default)]
+    pub driven_fraction: f64,
     /// How many times a worker started it.
     pub attempts: u32,
     /// Accepted at, milliseconds since the Unix epoch.
@@ -47,6 +53,8 @@ impl PlanRecord {
             metrics: self.metrics,
             error: self.error.clone(),
             warnings: self.warnings.clone(),
+            robot: self.robot.clone(),
+            driven_fraction: self.robot.as_ref().map(|_| self.driven_fraction),
             created_ms: self.created_ms,
             updated_ms: self.updated_ms,
         }

@@ -94,6 +94,8 @@ impl Site {
             origin: [g.origin.x, g.origin.y],
             free_cells: self.map.grid.free_count() as u64,
             points_in_tree: 0,
+            updates_per_s: 0.0,
+            dropped_clouds: 0,
             updated_ms: self.record.updated_ms,
             warnings: self.map.warnings.clone(),
         }
@@ -102,6 +104,11 @@ impl Site {
 
 /// Checks a site name: 1–64 characters of `[A-Za-z0-9_-]` (it becomes part of URLs and Zenoh keys).
 pub fn validate_site_name(name: &str) -> Result<()> {
+    validate_name("site", name)
+}
+
+/// Checks a name of `kind` (site, robot): 1–64 characters of `[A-Za-z0-9_-]`.
+pub fn validate_name(kind: &str, name: &str) -> Result<()> {
     let ok = !name.is_empty()
         && name.len() <= 64
         && name
@@ -111,7 +118,7 @@ pub fn validate_site_name(name: &str) -> Result<()> {
         Ok(())
     } else {
         Err(EngineError::InvalidRequest(format!(
-            "site name {name:?} must be 1-64 characters of letters, digits, '-' or '_'"
+            "{kind} name {name:?} must be 1-64 characters of letters, digits, '-' or '_'"
         )))
     }
 }

@@ -7,6 +7,7 @@ mod events;
 mod openapi;
 mod ops;
 mod plans;
+mod robots;
 mod sites;
 
 use std::sync::Arc;
@@ -26,6 +27,7 @@ use tower_http::trace::TraceLayer;
 pub use openapi::ApiDoc;
 
 use crate::brain::BrainHandle;
+use crate::fleet::live::LiveMaps;
 use crate::views::Views;
 
 /// What handlers hold: channel handles and read snapshots.
@@ -35,6 +37,8 @@ pub struct AppState {
     pub brain: BrainHandle,
     /// Read model of plans and sites.
     pub views: Arc<Views>,
+    /// Live site maps (ikd-trees fed by the fleet).
+    pub live: Arc<LiveMaps>,
     /// Plan events, for SSE subscribers.
     pub events: broadcast::Sender<PlanEvent>,
     /// Cancelled on shutdown (ends event streams).
@@ -58,6 +62,9 @@ pub fn router(state: AppState) -> Router {
         .route("/v1/plans/{id}", get(plans::get_plan).delete(plans::cancel_plan))
         .route("/v1/plans/{id}/path", get(plans::get_path))
         .route("/v1/plans/{id}/speed-profile", get(plans::get_speed_profile))
+        .route("/v1/plans/{id}/assign", post(robots::assign_plan))
+        .route("/v1/robots", get(robots::list_robots))
+        .route("/v1/robots/{id}", get(robots::get_robot))
         .layer(TimeoutLayer::with_status_code(
             StatusCode::REQUEST_TIMEOUT,
             state.request_timeout,

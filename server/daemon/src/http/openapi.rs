@@ -17,12 +17,15 @@ use utoipa::OpenApi;
         super::plans::get_path,
         super::plans::get_speed_profile,
         super::plans::cancel_plan,
+        super::robots::assign_plan,
+        super::robots::list_robots,
+        super::robots::get_robot,
         super::events::plan_events,
         super::ops::healthz,
         super::ops::readyz,
         super::ops::metrics_text,
     ),
-    tags((name = "plans"), (name = "sites"), (name = "ops"))
+    tags((name = "plans"), (name = "sites"), (name = "robots"), (name = "ops"))
 )]
 pub struct ApiDoc;
 

@@ -1,6 +1,7 @@
 use shift_proto::{PlanMetricsDoc, RobotSpec};
 
 use super::*;
+use crate::robots::Pose2;
 use crate::site::MapSource;
 
 fn site_event(name: &str) -> Event {
@@ -306,4 +307,123 @@ fn bad_site_name_is_refused() {
         Err(EngineError::InvalidRequest(_))
     ));
     assert!(e.site("s").is_some());
+}
+
+#[test]
+fn assign_tracks_progress_to_done_and_moves_between_robots() {
+    use shift_proto::{WaypointDoc, WaypointKindDoc};
+    let mut e = engine(1, 4);
+    e.handle(Event::PlanRequested(request("s")), 0).expect("runs");
+    let pts = [(0.5, 0.5), (1.5, 0.5), (2.5, 0.5)];
+    let doc = Arc::new(PlanDocument {
+        plan_id: "p-1".into(),
+        version: 1,
+        frame: "map".into(),
+        waypoints: pts
+            .iter()
+            .map(|&(x, y)| WaypointDoc {
+                x,
+                y,
+                z: 0.0,
+                v: 0.5,
+                t: 0.0,
+                kind: WaypointKindDoc::Cover,
+                region: Some(0),
+            })
+            .collect(),
+        regions: vec![],
+        metrics: PlanMetricsDoc::default(),
+    });
+    // Not ready yet: 409.
+    assert!(matches!(
+        e.handle(
+            Event::AssignPlan {
+                plan_id: "p-1".into(),
+                robot: "r1".into(),
+                doc: doc.clone()
+            },
+            1
+        ),
+        Err(EngineError::InvalidState { .. })
+    ));
+    e.handle(
+        Event::JobFinished {
+            plan_id: "p-1".into(),
+            outcome: JobOutcome::Planned {
+                doc: doc.clone(),
+                warnings: vec![],
+                regions: vec![],
+            },
+        },
+        2,
+    )
+    .expect("ready");
+    assert!(matches!(
+        e.handle(
+            Event::AssignPlan {
+                plan_id: "p-1".into(),
+                robot: "bad/name".into(),
+                doc: doc.clone()
+            },
+            3
+        ),
+        Err(EngineError::InvalidRequest(_))
+    ));
+    let c = e
+        .handle(
+            Event::AssignPlan {
+                plan_id: "p-1".into(),
+                robot: "r1".into(),
+                doc: doc.clone(),
+            },
+            3,
+        )
+        .expect("assigned");
+    assert!(c.iter().any(|c| matches!(c, Command::PublishPlan { robot, .. } if robot == "r1")));
+    assert_eq!(stored(&c), vec![("p-1".into(), PlanStatus::Active)]);
+    let pose = |x: f64| Pose2 {
+        x,
+        y: 0.5,
+        yaw: 0.0,
+        stamp_ns: 0,
+    };
+    e.handle(
+        Event::RobotPose {
+            robot: "r1".into(),
+            pose: pose(1.45),
+        },
+        4,
+    )
+    .expect("pose");
+    assert_eq!(e.plan("p-1").map(|r| r.driven_fraction), Some(0.5));
+    assert_eq!(e.robot("r1").and_then(|r| r.driven_m), Some(1.0));
+    let c = e
+        .handle(
+            Event::RobotPose {
+                robot: "r1".into(),
+                pose: pose(2.5),
+            },
+            5,
+        )
+        .expect("pose");
+    assert_eq!(stored(&c), vec![("p-1".into(), PlanStatus::Done)]);
+    // Liveliness: alive then lost.
+    e.handle(
+        Event::RobotLiveliness {
+            robot: "r1".into(),
+            alive: true,
+        },
+        6,
+    )
+    .expect("alive");
+    assert_eq!(e.robot("r1").map(|r| r.alive), Some(true));
+    e.handle(
+        Event::RobotLiveliness {
+            robot: "r1".into(),
+            alive: false,
+        },
+        7,
+    )
+    .expect("lost");
+    assert_eq!(e.robot("r1").map(|r| r.alive), Some(false));
 }

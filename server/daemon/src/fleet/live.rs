@@ -1,0 +1,89 @@
+//! Live site maps as the daemon holds them: the engine's pure [`LiveMap`] behind a lock (one writer: the
+//! ingest thread; many readers), plus the rates and drop counters the API shows.
+
+use std::collections::{HashMap, VecDeque};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex, RwLock};
+
+use shift_engine::{LiveMap, LiveMapParams};
+use shift_proto::SiteSummary;
+
+/// One site's live map.
+#[derive(Debug)]
+pub struct SiteLive {
+    /// The map.
+    pub map: RwLock<LiveMap>,
+    recent_ms: Mutex<VecDeque<u64>>,
+    /// Clouds dropped for this site (queue overflow, malformed, no pose to transform with).
+    pub dropped: AtomicU64,
+    /// Last horizon pass, milliseconds since the Unix epoch.
+    pub last_expire_ms: AtomicU64,
+}
+
+/// Window over which updates/s is measured, milliseconds.
+const RATE_WINDOW_MS: u64 = 10_000;
+
+impl SiteLive {
+    /// Records one ingested cloud at `now_ms`.
+    pub fn mark_update(&self, now_ms: u64) {
+        if let Ok(mut q) = self.recent_ms.lock() {
+            q.push_back(now_ms);
+            while q.front().is_some_and(|&t| now_ms.saturating_sub(t) > RATE_WINDOW_MS) {
+                q.pop_front();
+            }
+        }
+    }
+
+    /// Clouds per second over the last window.
+    pub fn updates_per_s(&self, now_ms: u64) -> f64 {
+        self.recent_ms.lock().map_or(0.0, |q| {
+            let n = q.iter().filter(|&&t| now_ms.saturating_sub(t) <= RATE_WINDOW_MS).count();
+            n as f64 / (RATE_WINDOW_MS as f64 / 1e3)
+        })
+    }
+}
+
+/// Every site's live map, created at the first cloud for the site (its box comes from the site's map).
+#[derive(Debug, Default)]
+pub struct LiveMaps {
+    sites: RwLock<HashMap<String, Arc<SiteLive>>>,
+}
+
+impl LiveMaps {
+    /// The site's live map, if it has one.
+    pub fn get(&self, site: &str) -> Option<Arc<SiteLive>> {
+        self.sites.read().ok()?.get(site).cloned()
+    }
+
+    /// The site's live map, created for `summary`'s extent when missing.
+    pub fn get_or_create(&self, summary: &SiteSummary, params: LiveMapParams) -> Option<Arc<SiteLive>> {
+        if let Some(s) = self.get(&summary.site) {
+            return Some(s);
+        }
+        let (x0, y0) = (summary.origin[0], summary.origin[1]);
+        let x1 = x0 + summary.width as f64 * summary.resolution;
+        let y1 = y0 + summary.height as f64 * summary.resolution;
+        let map = LiveMap::new(params, x0, y0, x1, y1).ok()?;
+        let live = Arc::new(SiteLive {
+            map: RwLock::new(map),
+            recent_ms: Mutex::new(VecDeque::new()),
+            dropped: AtomicU64::new(0),
+            last_expire_ms: AtomicU64::new(0),
+        });
+        let mut sites = self.sites.write().ok()?;
+        Some(sites.entry(summary.site.clone()).or_insert(live).clone())
+    }
+
+    /// Fills the live fields of a site summary.
+    pub fn annotate(&self, summary: &mut SiteSummary, now_ms: u64) {
+        if let Some(live) = self.get(&summary.site)
+            && let Ok(map) = live.map.read()
+        {
+            let st = map.stats();
+            summary.points_in_tree = st.points as u64;
+            summary.updated_ms = summary.updated_ms.max(st.last_update_ms);
+            summary.updates_per_s = live.updates_per_s(now_ms);
+            summary.dropped_clouds = live.dropped.load(Ordering::Relaxed);
+        }
+    }
+}

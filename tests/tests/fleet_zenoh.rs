@@ -1,0 +1,194 @@
+//! End-to-end over Zenoh on loopback (no scouting): a scripted robot announces itself, streams CDR odometry
+//! and clouds, receives its plan, a late joiner fetches it by query, and losing the token marks it lost.
+
+use std::time::Duration;
+
+use anyhow::{Context, Result, anyhow};
+use serde_json::{Value, json};
+use shift_proto::ros::odometry::{Odometry, encode_odometry};
+use shift_proto::ros::path::decode_path;
+use shift_proto::ros::point_cloud2::encode_point_cloud2_xyz;
+use shift_proto::ros::{Header, Time};
+use shift_proto::PlanDocument;
+use shift_tests::{TestServer, demo_request, test_config};
+use zenoh::bytes::Encoding;
+
+const LONG: Duration = Duration::from_secs(120);
+
+fn free_port() -> Result<u16> {
+    Ok(std::net::TcpListener::bind("127.0.0.1:0")?.local_addr()?.port())
+}
+
+async fn robot_session(endpoint: &str) -> Result<zenoh::Session> {
+    let mut c = zenoh::Config::default();
+    let set = |c: &mut zenoh::Config, k: &str, v: &str| c.insert_json5(k, v).map_err(|e| anyhow!("{k}: {e}"));
+    set(&mut c, "mode", "\"peer\"")?;
+    set(&mut c, "listen/endpoints", "[]")?;
+    set(&mut c, "connect/endpoints", &format!("[\"{endpoint}\"]"))?;
+    set(&mut c, "scouting/multicast/enabled", "false")?;
+    set(&mut c, "scouting/gossip/enabled", "false")?;
+    zenoh::open(c).await.map_err(|e| anyhow!("robot session: {e}"))
+}
+
+fn header(frame: &str, sec: i32) -> Header {
+    Header {
+        stamp: Time { sec, nanosec: 0 },
+        frame_id: frame.into(),
+    }
+}
+
+fn odom(x: f64, y: f64, sec: i32) -> Odometry {
+    let mut o = Odometry::default();
+    o.header = header("map", sec);
+    o.child_frame_id = "base_link".into();
+    o.pose.pose.position.x = x;
+    o.pose.pose.position.y = y;
+    o.pose.pose.orientation.w = 1.0;
+    o
+}
+
+async fn poll<T>(mut f: impl AsyncFnMut() -> Result<Option<T>>, what: &str) -> Result<T> {
+    let deadline = tokio::time::Instant::now() + LONG;
+    loop {
+        if let Some(v) = f().await? {
+            return Ok(v);
+        }
+        if tokio::time::Instant::now() > deadline {
+            anyhow::bail!("timed out waiting for {what}");
+        }
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn robot_streams_gets_its_plan_and_is_lost_when_its_token_drops() -> Result<()> {
+    let dir = tempfile::tempdir()?;
+    let port = free_port()?;
+    let endpoint = format!("tcp/127.0.0.1:{port}");
+    let mut config = test_config(dir.path());
+    config.zenoh.listen = vec![endpoint.clone()];
+    let server = TestServer::start(config).await?;
+
+    let robot = robot_session(&endpoint).await?;
+    let token = robot.liveliness().declare_token("shift/default/robots/r1/alive").await.map_err(|e| anyhow!("{e}"))?;
+    let plans = robot.declare_subscriber("shift/default/robots/r1/plan").await.map_err(|e| anyhow!("{e}"))?;
+    let paths = robot.declare_subscriber("shift/default/robots/r1/plan_path").await.map_err(|e| anyhow!("{e}"))?;
+
+    // The robot is seen alive.
+    poll(
+        async || {
+            let (code, r) = server.get("/v1/robots/r1").await?;
+            Ok((code == 200 && r["alive"] == true).then_some(()))
+        },
+        "robot r1 alive",
+    )
+    .await?;
+
+    // Odometry (CDR) and a cloud of an obstacle cluster in the map frame (a 3-D box 0.2-0.6 m high).
+    robot
+        .put("shift/default/robots/r1/odom", encode_odometry(&odom(0.5, 0.5, 1)))
+        .encoding(Encoding::APPLICATION_CDR)
+        .await
+        .map_err(|e| anyhow!("{e}"))?;
+    let mut pts = Vec::new();
+    for i in 0..20 {
+        for j in 0..20 {
+            for k in 0..3 {
+                pts.push([4.0 + i as f32 * 0.02, 4.0 + j as f32 * 0.02, 0.2 + k as f32 * 0.2]);
+            }
+        }
+    }
+    pts.push([4.0, 4.0, 0.0]); // floor: not an obstacle
+    robot
+        .put("shift/default/robots/r1/cloud", encode_point_cloud2_xyz(&header("map", 1), &pts))
+        .encoding(Encoding::APPLICATION_CDR)
+        .await
+        .map_err(|e| anyhow!("{e}"))?;
+    let site = poll(
+        async || {
+            let (_, s) = server.get("/v1/sites/demo").await?;
+            Ok((s["points_in_tree"].as_u64().unwrap_or(0) > 0).then_some(s))
+        },
+        "points in the live map",
+    )
+    .await?;
+    // 0.4 m × 0.4 m × 3 layers at 0.05 m voxels: 8 × 8 × 3 voxels (floor point filtered).
+    assert_eq!(site["points_in_tree"], 8 * 8 * 3, "{site}");
+    let r = server.get("/v1/robots/r1").await?.1;
+    assert!((r["pose"]["x"].as_f64().unwrap_or(0.0) - 0.5).abs() < 1e-9, "{r}");
+
+    // Plan, assign, receive.
+    let (_, acc) = server.post("/v1/plans", &demo_request()).await?;
+    let id = acc["plan_id"].as_str().context("id")?.to_owned();
+    server.wait_plan(&id, LONG, |s| s == "ready").await?;
+    let (code, st) = server.post(&format!("/v1/plans/{id}/assign"), &json!({"robot": "r1"})).await?;
+    assert_eq!(code, 200, "{st}");
+    assert_eq!(st["status"], "active");
+    let (_, served) = server.get(&format!("/v1/plans/{id}/path")).await?;
+    let sample = tokio::time::timeout(LONG, plans.recv_async()).await?.map_err(|e| anyhow!("{e}"))?;
+    let got: Value = serde_json::from_slice(&sample.payload().to_bytes())?;
+    assert_eq!(got, served, "the published plan is the served one");
+    let sample = tokio::time::timeout(LONG, paths.recv_async()).await?.map_err(|e| anyhow!("{e}"))?;
+    let path = decode_path(&sample.payload().to_bytes())?;
+    let doc: PlanDocument = serde_json::from_value(served.clone())?;
+    assert_eq!(path.poses.len(), doc.waypoints.len());
+
+    // A robot that joins late asks for its plan.
+    let late = robot_session(&endpoint).await?;
+    let replies = late.get("shift/default/robots/r1/plan").await.map_err(|e| anyhow!("{e}"))?;
+    let reply = tokio::time::timeout(LONG, replies.recv_async()).await?.map_err(|e| anyhow!("{e}"))?;
+    let sample = reply.result().map_err(|e| anyhow!("query error {e:?}"))?;
+    let fetched: Value = serde_json::from_slice(&sample.payload().to_bytes())?;
+    assert_eq!(fetched, served);
+
+    // Driving along the plan advances its progress.
+    let mid = &doc.waypoints[doc.waypoints.len() / 8];
+    for (n, w) in doc.waypoints.iter().take(doc.waypoints.len() / 8 + 1).enumerate() {
+        robot
+            .put("shift/default/robots/r1/odom", encode_odometry(&odom(w.x, w.y, 2 + n as i32)))
+            .encoding(Encoding::APPLICATION_CDR)
+            .await
+            .map_err(|e| anyhow!("{e}"))?;
+    }
+    let st = poll(
+        async || {
+            let (_, st) = server.get(&format!("/v1/plans/{id}")).await?;
+            Ok((st["driven_fraction"].as_f64().unwrap_or(0.0) > 0.0).then_some(st))
+        },
+        "progress along the plan",
+    )
+    .await?;
+    assert_eq!(st["robot"], "r1");
+    let r = server.get("/v1/robots/r1").await?.1;
+    assert!((r["pose"]["x"].as_f64().unwrap_or(0.0) - mid.x).abs() < 1e-9);
+
+    // The token goes: the robot is lost.
+    token.undeclare().await.map_err(|e| anyhow!("{e}"))?;
+    poll(
+        async || {
+            let (_, r) = server.get("/v1/robots/r1").await?;
+            Ok((r["alive"] == false).then_some(()))
+        },
+        "robot r1 lost",
+    )
+    .await?;
+    let robots = server.get("/v1/robots").await?.1;
+    assert_eq!(robots.as_array().map(Vec::len), Some(1));
+
+    // Malformed clouds are dropped and counted; ingest keeps working.
+    robot
+        .put("shift/default/robots/r1/cloud", vec![0u8, 1, 0, 0, 9, 9])
+        .await
+        .map_err(|e| anyhow!("{e}"))?;
+    poll(
+        async || {
+            let (_, s) = server.get("/v1/sites/demo").await?;
+            Ok((s["dropped_clouds"].as_u64().unwrap_or(0) >= 1).then_some(()))
+        },
+        "malformed cloud counted",
+    )
+    .await?;
+    late.close().await.map_err(|e| anyhow!("{e}"))?;
+    robot.close().await.map_err(|e| anyhow!("{e}"))?;
+    server.stop().await
+}
