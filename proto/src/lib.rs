@@ -1,15 +1,20 @@
 //! # shift-proto
 //!
-//! SHIFT's wire types: the plan JSON of DESIGN §5.1, the scene file of §5.2, and (as later issues land) the
-//! HTTP bodies, Zenoh key builders and ROS 2 codecs. Everything here is plain serde data; no algorithm.
+//! SHIFT's wire types: the plan JSON of DESIGN §5.1, the scene file of §5.2, the HTTP bodies of §5.3, the Zenoh
+//! key expressions of §5.4 ([`keys`]) and the ROS 2 CDR codecs ([`ros`]). Plain data and codecs; no algorithm,
+//! no I/O.
 
 pub mod api;
+pub mod error;
+pub mod keys;
 pub mod plan;
+pub mod ros;
 pub mod scene;
 
 pub use api::{
     AssignRequest, AttributeBlob, AttributeSpec, ErrorBody, ErrorDetail, PlanAccepted, PlanEvent, PlanOptions, PlanRequest,
     PlanStatus, PlanStatusResponse, RegionReady, RobotSpec, RobotView, PoseView, SiteSummary, SpeedProfileResponse, SpeedSample,
 };
+pub use error::CodecError;
 pub use plan::{PlanDocument, PlanMetricsDoc, RegionDoc, WaypointDoc, WaypointKindDoc};
 pub use scene::SceneFile;
