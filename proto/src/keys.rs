@@ -190,6 +190,20 @@ impl KeySpace {
         format!("{}/{}/plans/*/status", self.prefix, self.fleet)
     }
 
+    /// Every robot's plan key, for the queryable that serves current plans: `{prefix}/{fleet}/robots/*/plan`.
+    pub fn all_plan(&self) -> String {
+        format!("{}/{}/robots/*/plan", self.prefix, self.fleet)
+    }
+
+    /// The robot a plan key (or query on it) is for.
+    pub fn robot_of_plan(&self, key: &str) -> Option<String> {
+        let rest = key.strip_prefix(self.prefix.as_str())?.strip_prefix('/')?;
+        let rest = rest.strip_prefix(self.fleet.as_str())?.strip_prefix("/robots/")?;
+        let robot = rest.strip_suffix("/plan")?;
+        validate_name("robot name", robot).ok()?;
+        Some(robot.to_owned())
+    }
+
     /// The robot and stream of a received key `{prefix}/{fleet}/robots/{robot}/{odom|cloud|scan|alive}` of this
     /// key space; `None` for any other key (another prefix or fleet, another leaf, an invalid robot name).
     pub fn robot_of(&self, key: &str) -> Option<(String, Stream)> {

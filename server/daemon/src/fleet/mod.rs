@@ -221,8 +221,7 @@ impl Fleet {
                     () = s.cancelled() => break,
                     r = queryable.recv_async() => match r { Ok(x) => x, Err(_) => break },
                 };
-                let key = query.key_expr().as_str().to_owned();
-                let robot = key.rsplit('/').nth(1).unwrap_or_default().to_owned();
+                let Some(robot) = k.robot_of_plan(query.key_expr().as_str()) else { continue };
                 let Some(doc) = v.robot_plan(&robot) else { continue };
                 let Ok(json) = serde_json::to_vec(&*doc) else { continue };
                 let Ok(plan_key) = k.plan(&robot) else { continue };
