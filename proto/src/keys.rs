@@ -1,5 +1,5 @@
 //! Zenoh key expressions of DESIGN §5.4 (`{prefix}/{fleet}/robots/{robot}/odom` …): builders, wildcards and the
-//! parser that tells which robot and stream a received key belongs to. ROS 2 key layouts are in [`ros2`].
+//! parser that tells which robot and stream a received key belongs to. ROS 2 key layouts: [`Ros2Mapping`].
 
 mod ros2;
 
