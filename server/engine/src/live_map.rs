@@ -190,8 +190,8 @@ mod tests {
     fn filters_band_and_box_and_downsamples() {
         let mut m = map();
         let pts = [
-            [1.0, 1.0, 0.5],  // kept
-            [1.01, 1.01, 0.5], // same voxel: down-sampled away
+            [1.02, 1.02, 0.52], // kept
+            [1.03, 1.03, 0.53], // same 5 cm voxel: down-sampled away
             [1.0, 1.0, 0.01], // floor
             [1.0, 1.0, 3.0],  // overhead
             [20.0, 1.0, 0.5], // outside the site
