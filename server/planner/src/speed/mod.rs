@@ -13,6 +13,9 @@ pub mod refine;
 pub mod samples;
 pub mod time_param;
 
+#[cfg(test)]
+mod proptests;
+
 pub use attribute::{AttributeBlob, AttributeMap};
 pub use dwell::DwellLaw;
 pub use samples::PathSamples;
@@ -91,18 +94,23 @@ pub struct SpeedParams {
     pub smooth: Option<SmoothParams>,
     /// Largest distance between output waypoints, metres; `None` = tool_width / 4 (half the kernel σ).
     pub spacing_m: Option<f64>,
-    /// Closed-loop refinement steps (0 = the open-loop law).
+    /// Closed-loop refinement steps (0 = the open-loop law). Without an attribute map there is nothing to
+    /// follow and no refinement: v_max, capped by curvature and acceleration.
     pub refine_iterations: usize,
+    /// Share of the open-loop duration the refinement may add to make the deposit uniform (0.5 = up to 50 %
+    /// longer); see [`refine::refine`].
+    pub extra_time: f64,
 }
 
 impl SpeedParams {
-    /// Defaults for `limits` and a tool of width `tool_width_m`: smoothing on, 10 refinement steps.
+    /// Defaults for `limits` and a tool of width `tool_width_m`: smoothing on, 10 refinement steps, up to 50 % extra time.
     pub fn new(limits: SpeedLimits, tool_width_m: f64) -> Self {
         Self {
             limits,
             smooth: Some(SmoothParams::for_tool(tool_width_m)),
             spacing_m: None,
             refine_iterations: 10,
+            extra_time: 0.5,
         }
     }
 }
@@ -161,6 +169,7 @@ pub fn profile_path(
     limits.validate()?;
     let g = *space.geometry();
     let uniform;
+    let has_attribute = attribute.is_some();
     let attribute = match attribute {
         Some(a) if a.geometry() != &g => {
             return Err(PlannerError::InvalidParam {
@@ -237,7 +246,8 @@ pub fn profile_path(
         &limits,
         metric_floor,
         targets,
-        params.refine_iterations,
+        if has_attribute { params.refine_iterations } else { 0 },
+        params.extra_time,
     );
     let speeds = refined.speeds_mps;
     let t = time_param::times(&speeds, &samples.seg);

@@ -21,9 +21,6 @@ use super::{PathSamples, SpeedLimits};
 /// Largest factor one iteration may change a sample's speed by.
 const MAX_STEP: f64 = 2.0;
 
-/// Factor of the whole-profile scale trial at each step.
-pub const SCALE_STEP: f64 = 1.25;
-
 /// Outcome of the refinement.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Refined {
@@ -79,9 +76,12 @@ impl Simulator<'_> {
 /// Runs `iterations` refinement steps from the open-loop speed targets `targets` (m/s, already within the
 /// caps of `samples`). `metric_floor` is the attribute floor of the uniformity metric.
 ///
-/// Each step first tries the whole profile slower and faster by [`SCALE_STEP`] (the overall scale k of
-/// eq. 22 is free: the CV does not depend on it, but which samples end up pinned at v_min or v_max does) and
-/// keeps the best of the three, then takes one Richardson–Lucy step.
+/// Each step is one Richardson–Lucy update followed by a common speed factor that sets the plan's duration
+/// to the open-loop law's times (1 + `extra_time`). The open-loop law is time-optimal and leaves no room: the
+/// floor of the attribute already drives at v_max, so the over-deposit of passes that overlap and of the
+/// slow-downs at corners can only be balanced by dwelling longer elsewhere. `extra_time` is how much longer
+/// the caller lets the plan take for uniformity; the time is then moved to where the deposit is short.
+/// (Unbounded, the CV would keep falling by drowning the corners' slow spots in a uniformly slow plan.)
 #[allow(clippy::too_many_arguments)]
 pub fn refine(
     space: &CoverageSpace,
@@ -92,6 +92,7 @@ pub fn refine(
     metric_floor: f64,
     mut targets: Vec<f64>,
     iterations: usize,
+    extra_time: f64,
 ) -> Refined {
     let g = *space.geometry();
     let sigma = space.robot.tool_width_m / 2.0;
@@ -107,6 +108,7 @@ pub fn refine(
     let blurred_mask = gaussian_blur(&g, &mask, sigma);
     let mut current = sim.run(&targets);
     let open_loop_cv = current.cv;
+    let duration_goal = duration(samples, &current.speeds) * (1.0 + extra_time.max(0.0));
     let mut best = Refined {
         speeds_mps: current.speeds.clone(),
         dwell_cv: current.cv,
@@ -114,14 +116,6 @@ pub fn refine(
         kept_iteration: 0,
     };
     for it in 1..=iterations {
-        for f in [SCALE_STEP, 1.0 / SCALE_STEP] {
-            let scaled: Vec<f64> = targets.iter().map(|v| clamp(v * f)).collect();
-            let s = sim.run(&scaled);
-            if s.cv < current.cv {
-                current = s;
-                targets = scaled;
-            }
-        }
         let deposit = &current.deposit;
         // The CV does not depend on the scale of the desire, so the desire is rescaled to the deposit's
         // total: only its shape is matched.
@@ -160,6 +154,7 @@ pub fn refine(
             // Dwell per metre × r  ⇔  speed ÷ r.
             targets[i] = clamp(targets[i] / r);
         }
+        targets = fit_duration(samples, &targets, limits, duration_goal);
         current = sim.run(&targets);
         if current.cv < best.dwell_cv {
             best = Refined {
@@ -171,4 +166,39 @@ pub fn refine(
         }
     }
     best
+}
+
+/// Seconds to drive the samples at `speeds` (uniform acceleration between samples).
+fn duration(samples: &PathSamples, speeds: &[f64]) -> f64 {
+    samples
+        .seg
+        .iter()
+        .enumerate()
+        .map(|(k, s)| segment_duration(*s, speeds[k], speeds[k + 1]))
+        .sum()
+}
+
+/// The targets times a common factor (clamped to the limits) whose acceleration-limited profile takes
+/// `goal_s` seconds, found by bisection on the factor's logarithm (duration falls as the factor grows).
+fn fit_duration(samples: &PathSamples, targets: &[f64], limits: &SpeedLimits, goal_s: f64) -> Vec<f64> {
+    let scaled = |f: f64| -> Vec<f64> {
+        targets
+            .iter()
+            .map(|v| (v * f).clamp(limits.v_min_mps, limits.v_max_mps))
+            .collect()
+    };
+    let time_of = |t: &[f64]| {
+        let caps: Vec<f64> = t.iter().zip(&samples.caps).map(|(a, c)| a.min(*c)).collect();
+        duration(samples, &limit_acceleration(&caps, &samples.seg, limits.a_max_mps2))
+    };
+    let (mut lo, mut hi) = ((1.0f64 / 64.0).ln(), 64f64.ln());
+    for _ in 0..40 {
+        let mid = 0.5 * (lo + hi);
+        if time_of(&scaled(mid.exp())) > goal_s {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    scaled(hi.exp())
 }
