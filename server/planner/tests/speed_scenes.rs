@@ -126,23 +126,21 @@ fn profiles_meet_the_bar_on_every_shared_scene() {
     assert!(failures.is_empty(), "scenes below the bar:\n{}", failures.join("\n"));
 }
 
-/// Diagnostics: where the deposit departs from the desire (run with --ignored --nocapture).
+/// Diagnostics (run with --ignored --nocapture): the dwell CVs with transits counted as working too, and the
+/// spread of deposit / desire.
 #[test]
 #[ignore]
 fn diagnose_deposit() {
+    use shift_planner::metrics::dwell::dwell_cv;
     use shift_planner::speed::field::deposit_field;
+    use shift_planner::speed::metric_attribute_floor;
     use shift_planner::speed::time_param::segment_duration;
     for dir in shared_scenes() {
         let (space, attribute) = load(&dir);
         let Some(attr) = attribute else { continue };
         let out = plan(&space, &PlanParams::default(), &mut NoMonitor).expect("plan");
-        let mut params = SpeedParams::new(SpeedLimits::default(), space.robot.tool_width_m);
-        params.refine_iterations = std::env::var("ITER").ok().and_then(|s| s.parse().ok()).unwrap_or(6);
+        let params = SpeedParams::new(SpeedLimits::default(), space.robot.tool_width_m);
         let prof = profile_path(&space, &out.waypoints, Some(&attr), &params).expect("profile");
-        eprintln!(
-            "cv {:.3} open {:.3} const {:.3}",
-            prof.dwell.dwell_cv, prof.open_loop_dwell_cv, prof.dwell.dwell_cv_const_speed
-        );
         let pts = prof.points();
         let v: Vec<f64> = prof.waypoints.iter().map(|w| w.speed_mps).collect();
         let dur: Vec<f64> = pts
@@ -150,99 +148,42 @@ fn diagnose_deposit() {
             .enumerate()
             .map(|(k, w)| segment_duration((w[1] - w[0]).norm(), v[k], v[k + 1]))
             .collect();
-        let g = *space.geometry();
-        let floor = shift_planner::speed::metric_attribute_floor(1.0, &SpeedLimits::default());
+        let floor = metric_attribute_floor(1.0, &SpeedLimits::default());
         let total: f64 = dur.iter().sum();
         let len: f64 = pts.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
         let const_dur: Vec<f64> = pts.windows(2).map(|w| (w[1] - w[0]).norm() / len * total).collect();
-        eprintln!(
-            "transits counted as working too: dwell_cv {:.3} const {:.3}",
-            shift_planner::metrics::dwell::dwell_cv(&space, &pts, &dur, &attr, floor),
-            shift_planner::metrics::dwell::dwell_cv(&space, &pts, &const_dur, &attr, floor)
-        );
-        let dur: Vec<f64> = dur
+        let working: Vec<f64> = dur
             .iter()
-            .enumerate()
-            .map(|(k, d)| {
-                if prof.waypoints[k + 1].waypoint.kind == WaypointKind::Cover {
+            .zip(&prof.waypoints[1..])
+            .map(|(d, w)| {
+                if w.waypoint.kind == WaypointKind::Cover {
                     *d
                 } else {
                     0.0
                 }
             })
             .collect();
-        let d = deposit_field(&g, &pts, &dur, space.robot.tool_width_m / 2.0);
-        let law = prof.law;
-        let w = space.robot.tool_width_m;
-        let mut bins = vec![(0usize, 0.0f64); 10];
-        let mut edge = (0usize, 0.0f64, 0usize, 0.0f64);
-        let mut rs = Vec::new();
-        for i in 0..g.len() {
-            if !space.coverable[i] {
-                continue;
-            }
-            let r = d[i] / law.desired(attr.at(i));
-            rs.push(r);
-            let b = ((attr.at(i) * 10.0) as usize).min(9);
-            bins[b].0 += 1;
-            bins[b].1 += r;
-            if space.clearance.at(i) < space.robot.radius_m + w / 2.0 {
-                edge.0 += 1;
-                edge.1 += r;
-            } else {
-                edge.2 += 1;
-                edge.3 += r;
-            }
-        }
-        rs.sort_by(f64::total_cmp);
-        let med = rs[rs.len() / 2];
-        let mut img = image::RgbImage::new(g.width as u32, g.height as u32);
-        for i in 0..g.len() {
-            let (x, y) = (i % g.width, g.height - 1 - i / g.width);
-            let px = if space.coverable[i] {
-                let r = (d[i] / law.desired(attr.at(i)) / med).clamp(0.0, 2.0);
-                if r > 1.0 {
-                    image::Rgb([255, (255.0 * (2.0 - r)) as u8, (255.0 * (2.0 - r)) as u8])
-                } else {
-                    image::Rgb([(255.0 * r) as u8, (255.0 * r) as u8, 255])
-                }
-            } else {
-                image::Rgb([0, 0, 0])
-            };
-            img.put_pixel(x as u32, y as u32, px);
-        }
-        let name = dir
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        img.save(format!("/tmp/ratio_{name}.png")).expect("png");
-        let q = |f: f64| rs[((rs.len() - 1) as f64 * f) as usize];
+        let d = deposit_field(space.geometry(), &pts, &working, space.robot.tool_width_m / 2.0);
+        let mut ratio: Vec<f64> = d
+            .iter()
+            .zip(&space.coverable)
+            .enumerate()
+            .filter(|(_, (_, c))| **c)
+            .map(|(i, (d, _))| d / attr.at(i).max(floor))
+            .collect();
+        ratio.sort_by(f64::total_cmp);
+        let q = |f: f64| ratio[((ratio.len() - 1) as f64 * f) as usize] / ratio[ratio.len() / 2];
         eprintln!(
-            "{}: floor {:.3} ratio p5 {:.2} p25 {:.2} p50 {:.2} p75 {:.2} p95 {:.2}",
+            "{}: dwell_cv {:.3} (const {:.3}); transits counted as working: {:.3} (const {:.3}); deposit/desire over the median: p5 {:.2} p25 {:.2} p75 {:.2} p95 {:.2}",
             dir.display(),
-            law.attribute_floor(),
+            prof.dwell.dwell_cv,
+            prof.dwell.dwell_cv_const_speed,
+            dwell_cv(&space, &pts, &dur, &attr, floor),
+            dwell_cv(&space, &pts, &const_dur, &attr, floor),
             q(0.05),
             q(0.25),
-            q(0.5),
             q(0.75),
             q(0.95)
-        );
-        for (b, (n, s)) in bins.iter().enumerate() {
-            if *n > 0 {
-                eprintln!(
-                    "  A in [{:.1}, {:.1}): {n} cells mean ratio {:.2}",
-                    b as f64 / 10.0,
-                    (b + 1) as f64 / 10.0,
-                    s / *n as f64
-                );
-            }
-        }
-        eprintln!(
-            "  near walls {} cells mean {:.2}; interior {} cells mean {:.2}",
-            edge.0,
-            edge.1 / edge.0.max(1) as f64,
-            edge.2,
-            edge.3 / edge.2.max(1) as f64
         );
     }
 }

@@ -83,7 +83,7 @@ impl DwellLaw {
     /// Speed at attribute `a`, m/s, in [v_min, v_max]: λ · C_target / (k · A), v_max where k · A ≤ C_target.
     pub fn speed(&self, a: f64) -> f64 {
         let x = self.k_s_per_m2 * a / self.c_target_s_per_m2;
-        if !(x > 1.0) {
+        if x.is_nan() || x <= 1.0 {
             return self.lambda_mps;
         }
         (self.lambda_mps / x).clamp(self.v_min_mps, self.lambda_mps)

@@ -28,7 +28,7 @@ pub struct PathSamples {
 /// v_min at a sharp corner (κ = ∞), where the robot turns on the spot. Where even v_min exceeds the lateral
 /// bound, v_min wins: every waypoint keeps v ≥ v_min.
 pub fn curvature_cap(kappa: f64, limits: &SpeedLimits) -> f64 {
-    if !(kappa > 1e-12) {
+    if kappa.is_nan() || kappa <= 1e-12 {
         return limits.v_max_mps;
     }
     (limits.a_lat_mps2 / kappa)
