@@ -313,3 +313,68 @@ fn vertex_curvature(points: &[Point2], i: usize) -> f64 {
         0.0
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::map::{CellState, GridGeometry, OccupancyGrid};
+    use crate::pipeline::WaypointKind;
+    use crate::space::RobotShape;
+
+    fn space() -> CoverageSpace {
+        let g = GridGeometry::new(40, 20, 0.1, Point2::origin()).expect("valid");
+        let robot = RobotShape {
+            radius_m: 0.2,
+            tool_width_m: 0.4,
+        };
+        CoverageSpace::new(OccupancyGrid::filled(g, CellState::Free), robot, Point2::new(1.0, 1.0)).expect("space")
+    }
+
+    #[test]
+    fn degenerate_paths_and_bad_input() {
+        let s = space();
+        let params = SpeedParams::new(SpeedLimits::default(), 0.4);
+        assert!(
+            profile_path(&s, &[], None, &params)
+                .expect("empty")
+                .waypoints
+                .is_empty()
+        );
+        let one = [Waypoint {
+            position: s.start,
+            kind: WaypointKind::Transit,
+            region: None,
+        }];
+        let p = profile_path(&s, &one, None, &params).expect("one point");
+        assert_eq!(p.waypoints.len(), 1);
+        assert_eq!(p.waypoints[0].time_s, 0.0);
+        let bad = SpeedParams::new(SpeedLimits::new(1.0, 0.5, 0.5), 0.4);
+        assert!(profile_path(&s, &one, None, &bad).is_err());
+        let nan = SpeedParams::new(SpeedLimits::new(0.1, f64::NAN, 0.5), 0.4);
+        assert!(profile_path(&s, &one, None, &nan).is_err());
+        let other = AttributeMap::uniform(GridGeometry::new(5, 5, 0.1, Point2::origin()).expect("valid"), 0.5);
+        assert!(profile_path(&s, &one, Some(&other), &params).is_err());
+    }
+
+    #[test]
+    fn without_attribute_drives_at_v_max_between_corners() {
+        let s = space();
+        let w = |x: f64, y: f64| Waypoint {
+            position: Point2::new(x, y),
+            kind: WaypointKind::Cover,
+            region: Some(0),
+        };
+        let p = profile_path(
+            &s,
+            &[w(0.3, 1.0), w(3.7, 1.0)],
+            None,
+            &SpeedParams::new(SpeedLimits::default(), 0.4),
+        )
+        .expect("profile");
+        let top = p.waypoints.iter().map(|w| w.speed_mps).fold(0.0, f64::max);
+        // 3.4 m with v_min at both ends and a_max 0.5: the peak is reached in the middle, √(0.01 + 2·0.5·1.7).
+        assert!((top - (0.01f64 + 1.7).sqrt().min(1.0)).abs() < 0.05, "{top}");
+        assert_eq!(p.waypoints.first().map(|w| w.speed_mps), Some(0.1));
+        assert!(p.dwell.duration_s > 3.4);
+    }
+}
