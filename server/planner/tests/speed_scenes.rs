@@ -126,8 +126,8 @@ fn profiles_meet_the_bar_on_every_shared_scene() {
     assert!(failures.is_empty(), "scenes below the bar:\n{}", failures.join("\n"));
 }
 
-/// Diagnostics (run with --ignored --nocapture): the dwell CVs with transits counted as working too, and the
-/// spread of deposit / desire.
+/// Diagnostics (run with --ignored --nocapture; SHIFT_EXTRA_TIME=x sets the refinement's time allowance): the
+/// dwell CVs with transits counted as working too, and the spread of deposit / desire.
 #[test]
 #[ignore]
 fn diagnose_deposit() {
@@ -139,8 +139,15 @@ fn diagnose_deposit() {
         let (space, attribute) = load(&dir);
         let Some(attr) = attribute else { continue };
         let out = plan(&space, &PlanParams::default(), &mut NoMonitor).expect("plan");
-        let params = SpeedParams::new(SpeedLimits::default(), space.robot.tool_width_m);
+        let mut params = SpeedParams::new(SpeedLimits::default(), space.robot.tool_width_m);
+        if let Some(extra) = std::env::var("SHIFT_EXTRA_TIME").ok().and_then(|s| s.parse().ok()) {
+            params.extra_time = extra;
+        }
         let prof = profile_path(&space, &out.waypoints, Some(&attr), &params).expect("profile");
+        eprintln!(
+            "extra_time {}: duration {:.0} s",
+            params.extra_time, prof.dwell.duration_s
+        );
         let pts = prof.points();
         let v: Vec<f64> = prof.waypoints.iter().map(|w| w.speed_mps).collect();
         let dur: Vec<f64> = pts
