@@ -126,7 +126,8 @@ fn profiles_meet_the_bar_on_every_shared_scene() {
     assert!(failures.is_empty(), "scenes below the bar:\n{}", failures.join("\n"));
 }
 
-/// Diagnostics (run with --ignored --nocapture; SHIFT_EXTRA_TIME=x sets the refinement's time allowance): the
+/// Diagnostics (run with --ignored --nocapture; SHIFT_EXTRA_TIME=x sets the refinement's time allowance,
+/// SHIFT_DECOMPOSITION=bcd|walls|… the plan's decomposition): the
 /// dwell CVs with transits counted as working too, and the spread of deposit / desire.
 #[test]
 #[ignore]
@@ -138,15 +139,24 @@ fn diagnose_deposit() {
     for dir in shared_scenes() {
         let (space, attribute) = load(&dir);
         let Some(attr) = attribute else { continue };
-        let out = plan(&space, &PlanParams::default(), &mut NoMonitor).expect("plan");
+        let mut plan_params = PlanParams::default();
+        if let Some(d) = std::env::var("SHIFT_DECOMPOSITION").ok().and_then(|s| s.parse().ok()) {
+            plan_params.decomposition = d;
+        }
+        let out = plan(&space, &plan_params, &mut NoMonitor).expect("plan");
         let mut params = SpeedParams::new(SpeedLimits::default(), space.robot.tool_width_m);
         if let Some(extra) = std::env::var("SHIFT_EXTRA_TIME").ok().and_then(|s| s.parse().ok()) {
             params.extra_time = extra;
         }
         let prof = profile_path(&space, &out.waypoints, Some(&attr), &params).expect("profile");
         eprintln!(
-            "extra_time {}: duration {:.0} s",
-            params.extra_time, prof.dwell.duration_s
+            "{:?}, extra_time {}: duration {:.0} s, open-loop dwell_cv {:.3}, corners rounded {} sharp {}",
+            plan_params.decomposition,
+            params.extra_time,
+            prof.dwell.duration_s,
+            prof.open_loop_dwell_cv,
+            prof.rounded_corners,
+            prof.sharp_corners
         );
         let pts = prof.points();
         let v: Vec<f64> = prof.waypoints.iter().map(|w| w.speed_mps).collect();
