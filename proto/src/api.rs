@@ -5,6 +5,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::attribute::AttributeDoc;
 use crate::plan::PlanMetricsDoc;
 
 /// Error body of every non-2xx answer: `{"error": {"code", "message"}}`.
@@ -55,30 +56,6 @@ fn default_a_max() -> f64 {
     0.5
 }
 
-/// One Gaussian blob of the attribute map: A(p) += amplitude · exp(−|p − (x, y)|² / (2 sigma²)), clamped to [0, 1].
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
-#[serde(deny_unknown_fields)]
-pub struct AttributeBlob {
-    /// Centre x, metres, map frame.
-    pub x: f64,
-    /// Centre y, metres, map frame.
-    pub y: f64,
-    /// Standard deviation, metres.
-    pub sigma: f64,
-    /// Peak value in [0, 1].
-    pub amplitude: f64,
-}
-
-/// An attribute map (dirtiness, dryness) given inline.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
-#[serde(deny_unknown_fields)]
-pub struct AttributeSpec {
-    /// Gaussian blobs summed into A(x, y).
-    pub blobs: Vec<AttributeBlob>,
-}
-
 /// Planner choices; every field optional, the defaults are the best combination.
 #[derive(Debug, Clone, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
@@ -111,7 +88,7 @@ pub struct PlanRequest {
     pub robot: RobotSpec,
     /// Attribute map; uniform when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub attribute: Option<AttributeSpec>,
+    pub attribute: Option<AttributeDoc>,
     /// Only cover inside this polygon (`[[x, y], …]`, metres, map frame); the whole reachable map when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub region: Option<Vec<[f64; 2]>>,

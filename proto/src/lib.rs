@@ -5,6 +5,7 @@
 //! no I/O.
 
 pub mod api;
+pub mod attribute;
 pub mod error;
 pub mod keys;
 pub mod plan;
@@ -12,9 +13,10 @@ pub mod ros;
 pub mod scene;
 
 pub use api::{
-    AssignRequest, AttributeBlob, AttributeSpec, ErrorBody, ErrorDetail, PlanAccepted, PlanEvent, PlanOptions, PlanRequest,
+    AssignRequest, ErrorBody, ErrorDetail, PlanAccepted, PlanEvent, PlanOptions, PlanRequest,
     PlanStatus, PlanStatusResponse, RegionReady, RobotSpec, RobotView, PoseView, SiteSummary, SpeedProfileResponse, SpeedSample,
 };
 pub use error::CodecError;
+pub use attribute::{AttributeBlobDoc, AttributeDoc};
 pub use plan::{PlanDocument, PlanMetricsDoc, RegionDoc, WaypointDoc, WaypointKindDoc};
 pub use scene::SceneFile;

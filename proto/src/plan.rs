@@ -79,6 +79,12 @@ pub struct PlanMetricsDoc {
     pub collisions: u64,
     /// Time to drive the plan, seconds.
     pub duration_s: f64,
+    /// Dwell uniformity (DESIGN §6): CV of deposit / attribute over coverable cells with the planned speeds.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dwell_cv: Option<f64>,
+    /// The same for constant speed over the same path and total time.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dwell_cv_const_speed: Option<f64>,
     /// Time to compute the plan, milliseconds.
     pub compute_ms: f64,
 }

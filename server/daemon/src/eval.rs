@@ -1,5 +1,6 @@
 //! `shiftd eval`: every decomposition × order (default pattern) and the three baselines on every scene of a
-//! folder, as one table (or JSON lines), optionally rendering each plan.
+//! folder, as one table (or JSON lines), optionally rendering each plan. Every plan is speed-profiled
+//! (default limits, the scene's attribute map or A = 1) for its duration and dwell uniformity.
 
 use std::path::Path;
 use std::time::Instant;
@@ -12,9 +13,10 @@ use shift_planner::geom::Point2;
 use shift_planner::order::OrderMethod;
 use shift_planner::pipeline::{NoMonitor, PlanOutput, PlanParams, plan};
 use shift_planner::space::{CoverageSpace, RobotShape};
+use shift_planner::speed::{AttributeMap, SpeedLimits, SpeedParams, profile_path};
 
 use crate::render::render_png;
-use crate::scene_io::{load_scene, scene_dirs};
+use crate::scene_io::{load_attribute, load_scene, scene_attribute_path, scene_dirs};
 
 /// One row of the evaluation.
 #[derive(Debug, Clone, Serialize)]
@@ -39,17 +41,29 @@ pub struct EvalRow {
     pub compute_ms: f64,
     /// Collisions.
     pub collisions: usize,
+    /// Time to drive the profiled plan, seconds.
+    pub duration_s: f64,
+    /// Dwell uniformity with the profiled speeds (scenes with an attribute map).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dwell_cv: Option<f64>,
+    /// Dwell uniformity at constant speed, same path and time (scenes with an attribute map).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dwell_cv_const_speed: Option<f64>,
 }
 
-/// Builds the coverage space of a loaded scene.
-pub fn scene_space(dir: &Path) -> Result<(String, CoverageSpace)> {
+/// Builds the coverage space of a loaded scene, with its attribute map when it names one.
+pub fn scene_space(dir: &Path) -> Result<(String, CoverageSpace, Option<AttributeMap>)> {
     let s = load_scene(dir)?;
     let robot = RobotShape {
         radius_m: s.scene.robot_radius,
         tool_width_m: s.scene.tool_width,
     };
+    let attribute = match scene_attribute_path(&s) {
+        Some(p) => Some(load_attribute(&p, s.map.grid.geometry)?),
+        None => None,
+    };
     let space = CoverageSpace::new(s.map.grid, robot, Point2::new(s.scene.start[0], s.scene.start[1]))?;
-    Ok((s.name, space))
+    Ok((s.name, space, attribute))
 }
 
 /// Runs the evaluation over every scene under `root`.
@@ -59,9 +73,13 @@ pub fn run_eval(root: &Path, render: Option<&Path>, mut on_row: impl FnMut(&Eval
         std::fs::create_dir_all(dir)?;
     }
     for dir in scene_dirs(root)? {
-        let (name, space) = scene_space(&dir)?;
+        let (name, space, attribute) = scene_space(&dir)?;
+        let limits = SpeedLimits::default();
+        let speed = SpeedParams::new(limits, space.robot.tool_width_m);
         let mut emit = |decomposition: &str, order: &str, pattern: &str, out: &PlanOutput, ms: f64| -> Result<()> {
-            let m = out.metrics;
+            let profile = profile_path(&space, &out.waypoints, attribute.as_ref(), &speed)?;
+            let m = profile.metrics;
+            let d = profile.dwell;
             let row = EvalRow {
                 scene: name.clone(),
                 decomposition: decomposition.into(),
@@ -73,11 +91,15 @@ pub fn run_eval(root: &Path, render: Option<&Path>, mut on_row: impl FnMut(&Eval
                 turns: m.turns,
                 compute_ms: ms,
                 collisions: m.collisions,
+                duration_s: d.duration_s,
+                dwell_cv: attribute.is_some().then_some(d.dwell_cv),
+                dwell_cv_const_speed: attribute.is_some().then_some(d.dwell_cv_const_speed),
             };
             if let Some(dir) = render {
                 render_png(
                     &space,
                     out,
+                    Some((&profile, &limits)),
                     &dir.join(format!("{name}-{decomposition}-{order}-{pattern}.png")),
                     900,
                 )?;
@@ -125,12 +147,14 @@ pub fn run_eval(root: &Path, render: Option<&Path>, mut on_row: impl FnMut(&Eval
 }
 
 /// The table header.
-pub const TABLE_HEADER: &str = "scene                 decomposition order        pattern    coverage%  overlap%   length_m  turns  compute_ms  collisions";
+pub const TABLE_HEADER: &str = "scene                 decomposition order        pattern    coverage%  overlap%   length_m  turns  compute_ms  collisions  duration_s  dwell_cv  dwell_cv_const";
 
-/// One table line.
+/// One table line (coverage, length, turns and collisions of the smoothed path; "-" for the dwell figures of
+/// scenes without an attribute map).
 pub fn table_line(r: &EvalRow) -> String {
+    let opt = |v: Option<f64>| v.map_or_else(|| "-".to_owned(), |v| format!("{v:.3}"));
     format!(
-        "{:<21} {:<13} {:<12} {:<10} {:>9.2} {:>9.2} {:>10.1} {:>6} {:>11.1} {:>11}",
+        "{:<21} {:<13} {:<12} {:<10} {:>9.2} {:>9.2} {:>10.1} {:>6} {:>11.1} {:>11} {:>11.0} {:>9} {:>15}",
         r.scene,
         r.decomposition,
         r.order,
@@ -140,6 +164,9 @@ pub fn table_line(r: &EvalRow) -> String {
         r.length_m,
         r.turns,
         r.compute_ms,
-        r.collisions
+        r.collisions,
+        r.duration_s,
+        opt(r.dwell_cv),
+        opt(r.dwell_cv_const_speed)
     )
 }

@@ -81,14 +81,13 @@ impl JobRunner {
             let result = std::panic::catch_unwind(AssertUnwindSafe(|| run_job(&job, &mut monitor)));
             let compute_ms = t.elapsed().as_secs_f64() * 1e3;
             let outcome = match result {
-                Ok(Ok((_space, out))) => {
+                Ok(Ok(res)) => {
                     metrics::histogram!("shift_plan_compute_seconds").record(compute_ms / 1e3);
-                    let speed = job.request.robot.v_max;
-                    let doc = to_document(&plan_id, &out, speed, compute_ms);
-                    let regions = regions_ready(&out.waypoints, &doc.regions);
+                    let doc = to_document(&plan_id, &res.output, &res.profile, res.with_attribute, compute_ms);
+                    let regions = regions_ready(&res.output.waypoints, &doc.regions);
                     JobOutcome::Planned {
                         doc: Arc::new(doc),
-                        warnings: out.warnings,
+                        warnings: res.output.warnings,
                         regions,
                     }
                 }

@@ -12,10 +12,11 @@ use shift_planner::order::OrderMethod;
 use shift_planner::pattern::PatternMethod;
 use shift_planner::pipeline::{NoMonitor, PlanParams, plan};
 use shift_planner::space::{CoverageSpace, RobotShape};
+use shift_planner::speed::{SpeedLimits, SpeedParams, profile_path};
 use shiftd::eval::{TABLE_HEADER, run_eval, table_line};
 use shiftd::plan_doc::to_document;
 use shiftd::render::render_png;
-use shiftd::scene_io::{load_map, load_scene};
+use shiftd::scene_io::{load_attribute, load_map, load_scene, scene_attribute_path};
 
 #[derive(Parser)]
 #[command(name = "shiftd", version, about = "SHIFT: coverage planning for robot fleets")]
@@ -83,9 +84,22 @@ struct PlanArgs {
     /// Seed for every random choice.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Constant speed written into the plan until speed profiles land, m/s.
+    /// Attribute map (grey PGM/PNG of the map's size, or JSON blobs {"blobs": [{x, y, sigma, amplitude}]});
+    /// default: the scene's attribute, else A = 1 everywhere.
+    #[arg(long)]
+    attribute: Option<PathBuf>,
+    /// Slowest speed on the path, m/s.
+    #[arg(long, default_value_t = 0.1)]
+    v_min: f64,
+    /// Fastest speed, m/s.
+    #[arg(long, default_value_t = 1.0)]
+    v_max: f64,
+    /// Largest acceleration (tangential, and lateral in curves), m/s².
     #[arg(long, default_value_t = 0.5)]
-    speed: f64,
+    a_max: f64,
+    /// Keep the planned corners sharp (no B-spline rounding).
+    #[arg(long)]
+    no_smooth: bool,
     /// Output file ("-" for stdout).
     #[arg(long, default_value = "-")]
     out: PathBuf,
@@ -197,17 +211,17 @@ async fn shutdown_signal() {
 }
 
 fn cmd_plan(args: PlanArgs) -> Result<()> {
-    if !(args.speed.is_finite() && args.speed > 0.0) {
-        bail!("--speed must be a positive number of m/s, got {}", args.speed);
-    }
-    let (grid, start, robot, mut warnings) = if let Some(dir) = &args.scene {
+    let limits = SpeedLimits::new(args.v_min, args.v_max, args.a_max);
+    limits.validate().context("speed limits (--v-min, --v-max, --a-max)")?;
+    let (grid, start, robot, mut warnings, scene_attribute) = if let Some(dir) = &args.scene {
         let s = load_scene(dir)?;
         let robot = RobotShape {
             radius_m: args.robot_radius.unwrap_or(s.scene.robot_radius),
             tool_width_m: args.tool_width.unwrap_or(s.scene.tool_width),
         };
         let start = args.start.unwrap_or(Point2::new(s.scene.start[0], s.scene.start[1]));
-        (s.map.grid, start, robot, s.map.warnings)
+        let attribute = scene_attribute_path(&s);
+        (s.map.grid, start, robot, s.map.warnings, attribute)
     } else if let Some(map) = &args.map {
         let m = load_map(map)?;
         let start = args.start.context("--start X,Y is required with --map")?;
@@ -215,9 +229,13 @@ fn cmd_plan(args: PlanArgs) -> Result<()> {
             radius_m: args.robot_radius.context("--robot-radius is required with --map")?,
             tool_width_m: args.tool_width.context("--tool-width is required with --map")?,
         };
-        (m.grid, start, robot, m.warnings)
+        (m.grid, start, robot, m.warnings, None)
     } else {
         bail!("give --scene DIR or --map FILE.yaml");
+    };
+    let attribute = match args.attribute.as_ref().or(scene_attribute.as_ref()) {
+        Some(path) => Some(load_attribute(path, grid.geometry)?),
+        None => None,
     };
     let t = Instant::now();
     let space = CoverageSpace::new(grid, robot, start)?;
@@ -229,12 +247,17 @@ fn cmd_plan(args: PlanArgs) -> Result<()> {
         ..PlanParams::default()
     };
     let out = plan(&space, &params, &mut NoMonitor)?;
+    let mut speed = SpeedParams::new(limits, space.robot.tool_width_m);
+    if args.no_smooth {
+        speed.smooth = None;
+    }
+    let profile = profile_path(&space, &out.waypoints, attribute.as_ref(), &speed)?;
     let ms = t.elapsed().as_secs_f64() * 1e3;
     warnings.extend(out.warnings.iter().cloned());
     for w in &warnings {
         eprintln!("warning: {w}");
     }
-    let doc = to_document("p-cli", &out, args.speed, ms);
+    let doc = to_document("p-cli", &out, &profile, attribute.is_some(), ms);
     let text = serde_json::to_string_pretty(&doc)?;
     if args.out.as_os_str() == "-" {
         println!("{text}");
@@ -242,9 +265,9 @@ fn cmd_plan(args: PlanArgs) -> Result<()> {
         std::fs::write(&args.out, text).with_context(|| format!("writing {}", args.out.display()))?;
     }
     if let Some(png) = &args.render {
-        render_png(&space, &out, png, 1200)?;
+        render_png(&space, &out, Some((&profile, &limits)), png, 1200)?;
     }
-    let m = out.metrics;
+    let m = profile.metrics;
     eprintln!(
         "coverage {:.2} %  overlap {:.2} %  length {:.1} m  turns {}  collisions {}  regions {}  compute {:.0} ms  ({} + {})",
         m.coverage_pct,
@@ -256,6 +279,25 @@ fn cmd_plan(args: PlanArgs) -> Result<()> {
         ms,
         out.decomposition.name(),
         out.pattern.name()
+    );
+    let d = profile.dwell;
+    eprintln!(
+        "speed: duration {:.0} s  dwell_cv {:.3} (constant speed {:.3}{})  corners rounded {} sharp {}{}",
+        d.duration_s,
+        d.dwell_cv,
+        d.dwell_cv_const_speed,
+        if attribute.is_some() {
+            ""
+        } else {
+            ", no attribute: A = 1"
+        },
+        profile.rounded_corners,
+        profile.sharp_corners,
+        if profile.smoothing_reverted {
+            " (smoothing reverted)"
+        } else {
+            ""
+        }
     );
     let st = out.stats;
     eprintln!(

@@ -1,36 +1,36 @@
 //! Planner output → the plan document of DESIGN §5.1.
 
 use shift_planner::pipeline::{PlanOutput, WaypointKind};
+use shift_planner::speed::SpeedProfile;
 use shift_proto::{PlanDocument, PlanMetricsDoc, RegionDoc, WaypointDoc, WaypointKindDoc};
 
-/// Builds the wire document. Until speed profiles land, every waypoint gets the constant `speed_mps` and `t`
-/// is the arc length divided by it.
-pub fn to_document(plan_id: &str, out: &PlanOutput, speed_mps: f64, compute_ms: f64) -> PlanDocument {
-    let mut s = 0.0;
-    let mut prev: Option<shift_planner::geom::Point2> = None;
-    let waypoints = out
+/// Builds the wire document from the plan (regions) and its speed profile (the smoothed, timed waypoints:
+/// v in m/s, t in seconds from the start, and the metrics of that path). `with_dwell` adds the dwell
+/// uniformity figures (when an attribute map was given).
+pub fn to_document(
+    plan_id: &str,
+    out: &PlanOutput,
+    profile: &SpeedProfile,
+    with_dwell: bool,
+    compute_ms: f64,
+) -> PlanDocument {
+    let waypoints = profile
         .waypoints
         .iter()
-        .map(|w| {
-            if let Some(p) = prev {
-                s += (w.position - p).norm();
-            }
-            prev = Some(w.position);
-            WaypointDoc {
-                x: w.position.x,
-                y: w.position.y,
-                z: 0.0,
-                v: speed_mps,
-                t: s / speed_mps,
-                kind: match w.kind {
-                    WaypointKind::Cover => WaypointKindDoc::Cover,
-                    WaypointKind::Transit => WaypointKindDoc::Transit,
-                },
-                region: w.region,
-            }
+        .map(|w| WaypointDoc {
+            x: w.waypoint.position.x,
+            y: w.waypoint.position.y,
+            z: 0.0,
+            v: w.speed_mps,
+            t: w.time_s,
+            kind: match w.waypoint.kind {
+                WaypointKind::Cover => WaypointKindDoc::Cover,
+                WaypointKind::Transit => WaypointKindDoc::Transit,
+            },
+            region: w.waypoint.region,
         })
         .collect();
-    let m = &out.metrics;
+    let m = &profile.metrics;
     PlanDocument {
         plan_id: plan_id.to_owned(),
         version: 1,
@@ -50,7 +50,9 @@ pub fn to_document(plan_id: &str, out: &PlanOutput, speed_mps: f64, compute_ms: 
             length_m: m.length_m,
             turns: m.turns as u64,
             collisions: m.collisions as u64,
-            duration_s: m.length_m / speed_mps,
+            duration_s: profile.dwell.duration_s,
+            dwell_cv: with_dwell.then_some(profile.dwell.dwell_cv),
+            dwell_cv_const_speed: with_dwell.then_some(profile.dwell.dwell_cv_const_speed),
             compute_ms,
         },
     }

@@ -3,8 +3,10 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
-use shift_planner::map::{LoadedMap, load_ros_map};
-use shift_proto::SceneFile;
+use shift_planner::geom::Point2;
+use shift_planner::map::{GridGeometry, LoadedMap, load_ros_map};
+use shift_planner::speed::{AttributeBlob, AttributeMap};
+use shift_proto::{AttributeDoc, SceneFile};
 
 /// A scene read from a folder: the scene file, the loaded map and where it came from.
 #[derive(Debug, Clone)]
@@ -59,4 +61,33 @@ pub fn scene_dirs(root: &Path) -> Result<Vec<PathBuf>> {
     }
     out.sort();
     Ok(out)
+}
+
+/// Loads an attribute map for a grid: a `.json` file holds Gaussian blobs ([`AttributeDoc`]); anything else is
+/// a grey image (PGM or PNG) of the map's size, A = value / 255.
+pub fn load_attribute(path: &Path, geometry: GridGeometry) -> Result<AttributeMap> {
+    let bytes = std::fs::read(path).with_context(|| format!("reading attribute {}", path.display()))?;
+    let is_json = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("json"));
+    let map = if is_json {
+        let doc: AttributeDoc =
+            serde_json::from_slice(&bytes).with_context(|| format!("parsing attribute {}", path.display()))?;
+        let blobs: Vec<AttributeBlob> = doc
+            .blobs
+            .iter()
+            .map(|b| AttributeBlob {
+                centre: Point2::new(b.x, b.y),
+                sigma_m: b.sigma,
+                amplitude: b.amplitude,
+            })
+            .collect();
+        AttributeMap::from_blobs(geometry, &blobs)
+    } else {
+        AttributeMap::from_image_bytes(geometry, &bytes)
+    };
+    map.with_context(|| format!("attribute {}", path.display()))
+}
+
+/// The attribute file a scene names, resolved against its folder.
+pub fn scene_attribute_path(scene: &LoadedScene) -> Option<PathBuf> {
+    scene.scene.attribute.as_ref().map(|a| scene.dir.join(a))
 }

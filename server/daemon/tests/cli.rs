@@ -60,6 +60,20 @@ fn bad_input_exits_2_with_one_line() {
             "--start".into(),
             "NaN,1".into(),
         ],
+        vec![
+            "plan".into(),
+            "--scene".into(),
+            fixture().display().to_string(),
+            "--v-min".into(),
+            "2".into(),
+        ],
+        vec![
+            "plan".into(),
+            "--scene".into(),
+            fixture().display().to_string(),
+            "--attribute".into(),
+            "/nonexistent/attribute.pgm".into(),
+        ],
     ];
     for args in cases {
         let out = shiftd().args(&args).output().expect("runs");
@@ -68,4 +82,56 @@ fn bad_input_exits_2_with_one_line() {
         let lines: Vec<&str> = err.lines().filter(|l| l.starts_with("error:")).collect();
         assert_eq!(lines.len(), 1, "{args:?}: {err}");
     }
+}
+
+#[test]
+fn plan_follows_an_attribute_of_blobs() {
+    let dir = std::env::temp_dir().join(format!("shiftd-cli-attr-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("tmp");
+    let attr = dir.join("blobs.json");
+    std::fs::write(
+        &attr,
+        r#"{"blobs": [{"x": 2.0, "y": 2.0, "sigma": 1.0, "amplitude": 1.0}]}"#,
+    )
+    .expect("write");
+    let (out, png) = (dir.join("plan.json"), dir.join("plan.png"));
+    let status = shiftd()
+        .args(["plan", "--scene"])
+        .arg(fixture())
+        .arg("--attribute")
+        .arg(&attr)
+        .arg("--out")
+        .arg(&out)
+        .arg("--render")
+        .arg(&png)
+        .status()
+        .expect("runs");
+    assert!(status.success());
+    let doc: shift_proto::PlanDocument =
+        serde_json::from_str(&std::fs::read_to_string(&out).expect("written")).expect("plan JSON");
+    assert!(doc.waypoints.iter().all(|w| (0.1 - 1e-9..=1.0 + 1e-9).contains(&w.v)));
+    let (cv, cv_const) = (
+        doc.metrics.dwell_cv.expect("dwell_cv"),
+        doc.metrics.dwell_cv_const_speed.expect("const"),
+    );
+    assert!(cv < cv_const, "{cv} vs {cv_const}");
+    let last = doc.waypoints.last().expect("waypoints");
+    assert!((doc.metrics.duration_s - last.t).abs() < 1e-6 * last.t.max(1.0));
+    // Slower near the blob than far from it.
+    let near: Vec<f64> = doc
+        .waypoints
+        .iter()
+        .filter(|w| (w.x - 2.0).hypot(w.y - 2.0) < 0.5)
+        .map(|w| w.v)
+        .collect();
+    let far: Vec<f64> = doc
+        .waypoints
+        .iter()
+        .filter(|w| (w.x - 2.0).hypot(w.y - 2.0) > 3.0)
+        .map(|w| w.v)
+        .collect();
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+    assert!(mean(&near) < mean(&far), "{} vs {}", mean(&near), mean(&far));
+    assert!(png.is_file());
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -7,6 +7,8 @@ use shift_planner::geom::Point2;
 use shift_planner::map::grid::{CellState, OccupancyGrid};
 use shift_planner::pipeline::{PlanMonitor, PlanOutput, PlanParams, plan};
 use shift_planner::space::{CoverageSpace, RobotShape};
+use shift_planner::speed::attribute::{AttributeBlob, AttributeMap};
+use shift_planner::speed::{SpeedLimits, SpeedParams, SpeedProfile, profile_path};
 use shift_proto::PlanRequest;
 
 use crate::request::{ParsedOptions, point_in_polygon};
@@ -24,9 +26,23 @@ pub struct PlanJob {
     pub options: ParsedOptions,
 }
 
-/// Computes the plan. With a region polygon, cells whose centre lies outside it are treated as unknown
-/// (neither covered nor driven through), so the whole plan stays inside the polygon.
-pub fn run_job(job: &PlanJob, monitor: &mut dyn PlanMonitor) -> shift_planner::Result<(CoverageSpace, PlanOutput)> {
+/// A computed job: the planner's output and its smoothed, timed speed profile.
+#[derive(Debug)]
+pub struct JobResult {
+    /// The coverage space planned in.
+    pub space: CoverageSpace,
+    /// The plan (regions, waypoints before smoothing).
+    pub output: PlanOutput,
+    /// Smoothed waypoints with speed and time, and the metrics of that path.
+    pub profile: SpeedProfile,
+    /// An attribute map was given (the dwell uniformity figures mean something).
+    pub with_attribute: bool,
+}
+
+/// Computes the plan and its speed profile (RFICP with the request's attribute blobs; uniform without).
+/// With a region polygon, cells whose centre lies outside it are treated as unknown (neither covered nor
+/// driven through), so the whole plan stays inside the polygon.
+pub fn run_job(job: &PlanJob, monitor: &mut dyn PlanMonitor) -> shift_planner::Result<JobResult> {
     let grid = match &job.request.region {
         None => (*job.grid).clone(),
         Some(poly) => {
@@ -53,8 +69,34 @@ pub fn run_job(job: &PlanJob, monitor: &mut dyn PlanMonitor) -> shift_planner::R
         seed: job.options.seed,
         ..PlanParams::default()
     };
-    let out = plan(&space, &params, monitor)?;
-    Ok((space, out))
+    let output = plan(&space, &params, monitor)?;
+    if monitor.cancelled() {
+        return Err(shift_planner::PlannerError::Cancelled);
+    }
+    let attribute = match &job.request.attribute {
+        Some(a) => {
+            let blobs: Vec<AttributeBlob> = a
+                .blobs
+                .iter()
+                .map(|b| AttributeBlob {
+                    centre: Point2::new(b.x, b.y),
+                    sigma_m: b.sigma,
+                    amplitude: b.amplitude,
+                })
+                .collect();
+            Some(AttributeMap::from_blobs(space.grid.geometry, &blobs)?)
+        }
+        None => None,
+    };
+    let limits = SpeedLimits::new(r.v_min, r.v_max, r.a_max);
+    let speed = SpeedParams::new(limits, r.tool_width);
+    let profile = profile_path(&space, &output.waypoints, attribute.as_ref(), &speed)?;
+    Ok(JobResult {
+        space,
+        output,
+        profile,
+        with_attribute: attribute.is_some(),
+    })
 }
 
 #[cfg(test)]

@@ -6,7 +6,8 @@
 //!
 //! Pipeline: [`map`] (grids, distance fields) → [`space`] (footprint, reach, coverable set) →
 //! `decompose` (regions) → `pattern` (lanes, spiral, boundary passes) → `order` (visiting order) →
-//! `link` (transits) → `metrics` (DESIGN §6).
+//! `link` (transits) → `metrics` (DESIGN §6); then `smooth` (B-spline corners) and `speed` (RFICP speed
+//! profile and times) post-process the finished path.
 
 pub mod baseline;
 pub mod decompose;
@@ -18,7 +19,9 @@ pub mod metrics;
 pub mod order;
 pub mod pattern;
 pub mod pipeline;
+pub mod smooth;
 pub mod space;
+pub mod speed;
 pub mod testing;
 
 pub use error::{PlannerError, Result};

@@ -8,8 +8,10 @@
 //!   cell centre.
 
 pub mod coverage;
+pub mod dwell;
 
 pub use coverage::CoverageRaster;
+pub use dwell::{DwellMetrics, evaluate_dwell};
 
 use crate::geom::{Point2, heading_change};
 use crate::space::CoverageSpace;
