@@ -12,6 +12,7 @@ use crate::metrics::{CoverageRaster, PlanMetrics, evaluate};
 use crate::order::{DistanceMatrix, OrderMethod, SolveBudget, TourOption, TourProblem};
 use crate::pattern::boundary::{PassParams, candidates, select};
 use crate::pattern::contour::trace_cells;
+use crate::pattern::frame::frame_tasks;
 use crate::pattern::lanes::{LaneParams, Placement, RegionView, plan_lanes};
 use crate::pattern::spiral::plan_rings;
 use crate::pattern::{PatternMethod, Task};
@@ -20,6 +21,13 @@ use route::{RegionRoute, region_options};
 
 /// Largest reachable set (cells) for which `auto` also tries one spiral over the undivided space.
 pub const AUTO_SPIRAL_MAX_CELLS: usize = 250_000;
+
+/// Above this many reachable cells, `auto` chooses its strategy (decomposition, pattern, lane placement) on
+/// a coarsened copy of the site and plans only the winner at full resolution.
+pub const AUTO_COARSE_MIN_CELLS: usize = 1_000_000;
+
+/// Reachable cells the coarsened copy aims at.
+pub const AUTO_COARSE_TARGET_CELLS: usize = 250_000;
 
 /// Everything a plan request can choose. `Default` is the best combination.
 #[derive(Debug, Clone, PartialEq)]
@@ -146,7 +154,7 @@ impl PlanStats {
                 .map(Task::length)
                 .sum()
         };
-        let pattern_m = sum(&[TaskKind::Lane, TaskKind::Ring]);
+        let pattern_m = sum(&[TaskKind::Lane, TaskKind::Ring, TaskKind::Frame]);
         let passes_m = sum(&[TaskKind::Boundary]);
         let visits = tasks.iter().flatten().filter(|t| t.kind == TaskKind::Visit).count();
         Self {
@@ -176,6 +184,8 @@ pub struct PlanOutput {
     pub decomposition: DecompositionMethod,
     /// The pattern that produced this plan.
     pub pattern: PatternMethod,
+    /// The lane placement that produced this plan (`None` for patterns without lanes).
+    pub lane_placement: Option<Placement>,
     /// Remarks for the user.
     pub warnings: Vec<String>,
 }
@@ -188,9 +198,34 @@ impl PlanOutput {
 }
 
 /// Plans a full coverage of `space` from and back to its start. Without a fixed lane placement, plans with
-/// the map-wide lane lattice and with per-region fitted lanes (see [`Placement`]) and keeps the shorter plan
-/// of the two that meet the coverage target (the lattice wins ties).
+/// the map-wide lane lattice, with per-region fitted lanes and with framed lanes (see [`Placement`]) and
+/// keeps the shortest plan that meets the coverage target (the lattice wins ties).
 pub fn plan(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanMonitor) -> Result<PlanOutput> {
+    if params.decomposition == DecompositionMethod::Auto && space.reachable_count() > AUTO_COARSE_MIN_CELLS {
+        // Large site: choose on a coarse copy, then plan once. The coarse grid keeps the ranking of the
+        // strategies (what favours one over another — room shapes, clutter, wall directions — is far larger
+        // than a few cells) at a fraction of the cost.
+        let factor = ((space.reachable_count() as f64 / AUTO_COARSE_TARGET_CELLS as f64)
+            .sqrt()
+            .ceil()) as usize;
+        if let Ok(coarse) = space.coarsened(factor)
+            && let Ok(choice) = plan(&coarse, params, monitor)
+        {
+            return plan(
+                space,
+                &PlanParams {
+                    decomposition: choice.decomposition,
+                    pattern: choice.pattern,
+                    lanes: LaneParams {
+                        placement: choice.lane_placement.or(params.lanes.placement),
+                        ..params.lanes
+                    },
+                    ..params.clone()
+                },
+                monitor,
+            );
+        }
+    }
     if params.decomposition == DecompositionMethod::Auto {
         let mut best: Option<PlanOutput> = None;
         let mut portfolio = vec![
@@ -214,7 +249,7 @@ pub fn plan(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanMo
             )?;
             let better = best.as_ref().is_none_or(|b| {
                 let ok = |o: &PlanOutput| o.metrics.collisions == 0 && o.metrics.coverage_pct >= 99.0;
-                (ok(&out), -out.metrics.length_m) > (ok(b), -b.metrics.length_m)
+                (ok(&out), -out.metrics.overlap_pct) > (ok(b), -b.metrics.overlap_pct)
             });
             if better {
                 best = Some(out);
@@ -232,16 +267,23 @@ pub fn plan(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanMo
         },
         ..params.clone()
     };
-    let lattice = plan_once(space, &with(Placement::Lattice), monitor)?;
-    let fit = plan_once(space, &with(Placement::Fit), monitor)?;
     let good = |o: &PlanOutput| {
         o.metrics.collisions == 0 && o.metrics.coverage_pct + 1e-9 >= params.passes.coverage_target_pct.min(99.0)
     };
-    Ok(match (good(&lattice), good(&fit)) {
-        (true, true) if fit.metrics.length_m + 1e-9 < lattice.metrics.length_m => fit,
-        (false, true) => fit,
-        _ => lattice,
-    })
+    // The first placement that meets the bar with the shortest path wins (earlier ones win ties).
+    let mut best = plan_once(space, &with(Placement::Lattice), monitor)?;
+    for p in [Placement::Fit, Placement::Framed] {
+        let out = plan_once(space, &with(p), monitor)?;
+        let better = match (good(&best), good(&out)) {
+            (true, true) => out.metrics.length_m + 1e-9 < best.metrics.length_m,
+            (false, true) => true,
+            _ => false,
+        };
+        if better {
+            best = out;
+        }
+    }
+    Ok(best)
 }
 
 fn plan_once(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanMonitor) -> Result<PlanOutput> {
@@ -295,6 +337,11 @@ fn plan_once(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanM
     let mut angles = Vec::with_capacity(regions.count);
     for id in 0..regions.count {
         let (angle, t) = match params.pattern {
+            PatternMethod::Lanes if params.lanes.placement == Some(Placement::Framed) => {
+                let (angle, mut t) = plan_lanes(space, view(id), &params.lanes);
+                t.extend(frame_tasks(space, view(id)));
+                (angle, t)
+            }
             PatternMethod::Lanes => plan_lanes(space, view(id), &params.lanes),
             PatternMethod::Spiral => (0.0, plan_rings(space, view(id))),
         };
@@ -424,6 +471,9 @@ fn plan_once(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanM
         warnings,
         decomposition: params.decomposition,
         pattern: params.pattern,
+        lane_placement: (params.pattern == PatternMethod::Lanes)
+            .then_some(params.lanes.placement)
+            .flatten(),
     })
 }
 
