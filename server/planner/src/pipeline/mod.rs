@@ -22,12 +22,9 @@ use route::{RegionRoute, region_options};
 /// Largest reachable set (cells) for which `auto` also tries one spiral over the undivided space.
 pub const AUTO_SPIRAL_MAX_CELLS: usize = 250_000;
 
-/// Above this many reachable cells, `auto` chooses its strategy (decomposition, pattern, lane placement) on
-/// a coarsened copy of the site and plans only the winner at full resolution.
-pub const AUTO_COARSE_MIN_CELLS: usize = 1_000_000;
-
-/// Reachable cells the coarsened copy aims at.
-pub const AUTO_COARSE_TARGET_CELLS: usize = 250_000;
+/// Largest reachable set (cells) on which lanes are also tried in the framed placement (each placement is
+/// a full plan; on large sites the third one costs more than it brings).
+pub const FRAMED_MAX_CELLS: usize = 1_000_000;
 
 /// Everything a plan request can choose. `Default` is the best combination.
 #[derive(Debug, Clone, PartialEq)]
@@ -198,64 +195,15 @@ impl PlanOutput {
 }
 
 /// Plans a full coverage of `space` from and back to its start. Without a fixed lane placement, plans with
-/// the map-wide lane lattice, with per-region fitted lanes and with framed lanes (see [`Placement`]) and
-/// keeps the shortest plan that meets the coverage target (the lattice wins ties).
+/// the map-wide lane lattice, with per-region fitted lanes and (up to [`FRAMED_MAX_CELLS`] reachable cells)
+/// with framed lanes (see [`Placement`]) and keeps the shortest plan that meets the coverage target (the
+/// lattice wins ties).
 pub fn plan(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanMonitor) -> Result<PlanOutput> {
-    if params.decomposition == DecompositionMethod::Auto && space.reachable_count() > AUTO_COARSE_MIN_CELLS {
-        // Large site: choose on a coarse copy, then plan once. The coarse grid keeps the ranking of the
-        // strategies (what favours one over another — room shapes, clutter, wall directions — is far larger
-        // than a few cells) at a fraction of the cost.
-        let factor = ((space.reachable_count() as f64 / AUTO_COARSE_TARGET_CELLS as f64)
-            .sqrt()
-            .ceil()) as usize;
-        if let Ok(coarse) = space.coarsened(factor)
-            && let Ok(choice) = plan(&coarse, params, monitor)
-        {
-            return plan(
-                space,
-                &PlanParams {
-                    decomposition: choice.decomposition,
-                    pattern: choice.pattern,
-                    lanes: LaneParams {
-                        placement: choice.lane_placement.or(params.lanes.placement),
-                        ..params.lanes
-                    },
-                    ..params.clone()
-                },
-                monitor,
-            );
-        }
-    }
     if params.decomposition == DecompositionMethod::Auto {
-        let mut best: Option<PlanOutput> = None;
-        let mut portfolio = vec![
-            (DecompositionMethod::Bcd, params.pattern),
-            (DecompositionMethod::Walls, params.pattern),
-        ];
         // The undivided spiral's routing and pass selection grow faster than linearly with the area (one
         // region holding every ring); on large sites it costs minutes, so it only joins below this size.
-        if space.reachable_count() <= AUTO_SPIRAL_MAX_CELLS {
-            portfolio.push((DecompositionMethod::Single, PatternMethod::Spiral));
-        }
-        for (d, pattern) in portfolio {
-            let out = plan(
-                space,
-                &PlanParams {
-                    decomposition: d,
-                    pattern,
-                    ..params.clone()
-                },
-                monitor,
-            )?;
-            let better = best.as_ref().is_none_or(|b| {
-                let ok = |o: &PlanOutput| o.metrics.collisions == 0 && o.metrics.coverage_pct >= 99.0;
-                (ok(&out), -out.metrics.overlap_pct) > (ok(b), -b.metrics.overlap_pct)
-            });
-            if better {
-                best = Some(out);
-            }
-        }
-        return best.ok_or(PlannerError::Cancelled);
+        let spiral = space.reachable_count() <= AUTO_SPIRAL_MAX_CELLS;
+        return auto(space, params, monitor, spiral);
     }
     if params.lanes.placement.is_some() || params.pattern != PatternMethod::Lanes {
         return plan_once(space, params, monitor);
@@ -272,7 +220,12 @@ pub fn plan(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanMo
     };
     // The first placement that meets the bar with the shortest path wins (earlier ones win ties).
     let mut best = plan_once(space, &with(Placement::Lattice), monitor)?;
-    for p in [Placement::Fit, Placement::Framed] {
+    let placements: &[Placement] = if space.reachable_count() <= FRAMED_MAX_CELLS {
+        &[Placement::Fit, Placement::Framed]
+    } else {
+        &[Placement::Fit]
+    };
+    for &p in placements {
         let out = plan_once(space, &with(p), monitor)?;
         let better = match (good(&best), good(&out)) {
             (true, true) => out.metrics.length_m + 1e-9 < best.metrics.length_m,
@@ -284,6 +237,35 @@ pub fn plan(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanMo
         }
     }
     Ok(best)
+}
+
+/// The `auto` portfolio on `space`: bcd and walls in the requested pattern, and the undivided spiral when
+/// `spiral`; keeps the plan with the least overlap that meets the bar.
+fn auto(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanMonitor, spiral: bool) -> Result<PlanOutput> {
+    let mut best: Option<PlanOutput> = None;
+    let mut portfolio = vec![
+        (DecompositionMethod::Bcd, params.pattern),
+        (DecompositionMethod::Walls, params.pattern),
+    ];
+    if spiral {
+        portfolio.push((DecompositionMethod::Single, PatternMethod::Spiral));
+    }
+    for (d, pattern) in portfolio {
+        let member = PlanParams {
+            decomposition: d,
+            pattern,
+            ..params.clone()
+        };
+        let out = plan(space, &member, monitor)?;
+        let better = best.as_ref().is_none_or(|b| {
+            let ok = |o: &PlanOutput| o.metrics.collisions == 0 && o.metrics.coverage_pct >= 99.0;
+            (ok(&out), -out.metrics.overlap_pct) > (ok(b), -b.metrics.overlap_pct)
+        });
+        if better {
+            best = Some(out);
+        }
+    }
+    best.ok_or(PlannerError::Cancelled)
 }
 
 fn plan_once(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanMonitor) -> Result<PlanOutput> {
@@ -438,6 +420,15 @@ fn plan_once(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanM
     // Assemble: dock → region routes with links → dock.
     let mut path = Path::new(space.start);
     let mut linker = Linker::new(space, &params.link);
+    // Steps inside a region sweep as they go: they take the shortest way (no potential field), which also
+    // hugs the walls whose band they help to cover.
+    let mut step_linker = Linker::new(
+        space,
+        &LinkParams {
+            alpha: 0.0,
+            ..params.link
+        },
+    );
     let mut summaries = Vec::with_capacity(active.len());
     for (&k, &o) in tour.order.iter().zip(&tour.options) {
         let id = active[k];
@@ -447,7 +438,7 @@ fn plan_once(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanM
         }
         for leg in &route.legs {
             let pts = leg.points(&tasks[id]);
-            if path.cover_to(space, pts[0], id as u32, &mut linker, &mut warnings) {
+            if path.cover_to(space, pts[0], id as u32, &mut step_linker, &mut warnings) {
                 for &p in &pts[1..] {
                     path.push(p, WaypointKind::Cover, Some(id as u32));
                 }
