@@ -33,12 +33,15 @@ fn main() {
         let plan_ms = t.elapsed().as_secs_f64() * 1e3;
         let m = out.metrics;
         println!(
-            "{{\"side_m\": {side}, \"cells\": {}, \"space_ms\": {space_ms:.0}, \"plan_ms\": {plan_ms:.0}, \"regions\": {}, \"coverage_pct\": {:.2}, \"overlap_pct\": {:.2}, \"collisions\": {}}}",
+            "{{\"side_m\": {side}, \"cells\": {}, \"space_ms\": {space_ms:.0}, \"plan_ms\": {plan_ms:.0}, \"regions\": {}, \"coverage_pct\": {:.2}, \"overlap_pct\": {:.2}, \"collisions\": {}, \"chose\": \"{}/{}/{:?}\"}}",
             space.geometry().len(),
             out.regions.len(),
             m.coverage_pct,
             m.overlap_pct,
-            m.collisions
+            m.collisions,
+            out.decomposition.name(),
+            out.pattern.name(),
+            out.lane_placement
         );
     }
 }

@@ -111,5 +111,6 @@ pub fn random_walk(space: &CoverageSpace, seed: u64, length_budget_m: f64) -> Pl
         warnings: Vec::new(),
         decomposition: DecompositionMethod::Single,
         pattern: PatternMethod::Lanes,
+        lane_placement: None,
     }
 }

@@ -11,7 +11,7 @@ use std::collections::VecDeque;
 
 use crate::error::{PlannerError, Result, finite};
 use crate::geom::Point2;
-use crate::map::{Cell, DistanceField, GridGeometry, OccupancyGrid};
+use crate::map::{Cell, CellState, DistanceField, GridGeometry, OccupancyGrid};
 
 /// The robot as coverage sees it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -130,6 +130,29 @@ impl CoverageSpace {
         })
     }
 
+    /// The same site on a grid `factor` times coarser (each coarse cell is free only when all the fine
+    /// cells it holds are free, occupied when any is occupied, else unknown), for the same robot and start.
+    /// For cheap previews of large sites; `factor` ≤ 1 gives a copy of the grid's space. (Choosing `auto`'s
+    /// strategy on a 4× coarser copy was tried: the ranking did not carry over to full resolution.)
+    pub fn coarsened(&self, factor: usize) -> Result<Self> {
+        let g = self.geometry();
+        let k = factor.max(1);
+        let (w, h) = (g.width.div_ceil(k), g.height.div_ceil(k));
+        let geometry = GridGeometry::new(w, h, g.resolution * k as f64, g.origin)?;
+        let mut cells = vec![CellState::Free; w * h];
+        for (i, state) in self.grid.cells.iter().enumerate() {
+            let c = g.cell(i);
+            let j = (c.y / k) * w + c.x / k;
+            cells[j] = match (cells[j], *state) {
+                (CellState::Occupied, _) | (_, CellState::Occupied) => CellState::Occupied,
+                (CellState::Unknown, _) | (_, CellState::Unknown) => CellState::Unknown,
+                _ => CellState::Free,
+            };
+        }
+        // Coarse cells past the fine grid's edge hold fewer fine cells; they stay as their fine cells say.
+        Self::new(OccupancyGrid::new(geometry, cells)?, self.robot, self.start)
+    }
+
     /// The raster geometry.
     pub fn geometry(&self) -> &GridGeometry {
         &self.grid.geometry
@@ -199,6 +222,26 @@ pub fn flood_fill8(g: &GridGeometry, mask: &[bool], seed: Cell) -> Vec<bool> {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn coarsening_keeps_obstacles_and_the_start() {
+        let g = GridGeometry::new(41, 30, 0.1, Point2::origin()).expect("valid");
+        let mut grid = OccupancyGrid::filled(g, CellState::Free);
+        grid.fill_rect(2.01, 1.0, 2.09, 2.0, CellState::Occupied);
+        let robot = RobotShape {
+            radius_m: 0.3,
+            tool_width_m: 0.6,
+        };
+        let space = CoverageSpace::new(grid, robot, Point2::new(0.5, 0.5)).expect("space");
+        let coarse = space.coarsened(2).expect("coarse");
+        let cg = *coarse.geometry();
+        assert_eq!((cg.width, cg.height), (21, 15));
+        assert!((cg.resolution - 0.2).abs() < 1e-12);
+        let wall = cg.index(cg.locate(Point2::new(2.02, 1.5)).expect("on map"));
+        assert!(!coarse.grid.is_free(wall), "a thin wall survives coarsening");
+        assert_eq!(coarse.start, space.start);
+        assert!(coarse.reachable_count() > 0);
+    }
+
     use super::*;
     use crate::map::CellState;
 

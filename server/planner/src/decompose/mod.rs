@@ -7,6 +7,7 @@
 
 pub mod bcd;
 pub mod grid;
+pub mod outline;
 pub mod voronoi;
 pub mod walls;
 
@@ -77,9 +78,9 @@ pub trait Decomposer {
 pub enum DecompositionMethod {
     /// The default: plan with boustrophedon cells and with wall division (in the requested pattern), and — up
     /// to `pipeline::AUTO_SPIRAL_MAX_CELLS` reachable cells — with one spiral over the undivided space, and
-    /// keep the shortest plan that meets the coverage bar. No single
-    /// strategy wins on every kind of map: rooms favour the contour-following spiral, racks and aisles the
-    /// cells, open ground with round obstacles the wall division.
+    /// keep the plan with the least overlap (DESIGN §6: swept area per covered area) that meets the coverage
+    /// bar. No single strategy wins on every kind of map: rooms favour the contour-following spiral, racks and
+    /// aisles the cells, open ground with round obstacles the wall division.
     #[default]
     Auto,
     /// Boustrophedon cellular decomposition (Choset): cells split at the sweep line's critical points.

@@ -62,9 +62,22 @@ impl DistanceMatrix {
     /// `f` is called once per unordered pair, n(n−1)/2 times, in row-major order.
     pub fn from_fn(n: usize, f: impl Fn(usize, usize) -> f64) -> Self {
         let mut m = Self::new(n);
+        // Upper triangle row by row (contiguous writes), then mirrored tile by tile so that the strided
+        // writes of the lower triangle stay in cache.
         for i in 0..n {
-            for j in i + 1..n {
-                m.set(i, j, f(i, j));
+            let row = &mut m.data[i * n..(i + 1) * n];
+            for (j, v) in row.iter_mut().enumerate().skip(i + 1) {
+                *v = f(i, j);
+            }
+        }
+        const TILE: usize = 64;
+        for bi in (0..n).step_by(TILE) {
+            for bj in (bi..n).step_by(TILE) {
+                for i in bi..(bi + TILE).min(n) {
+                    for j in bj.max(i + 1)..(bj + TILE).min(n) {
+                        m.data[j * n + i] = m.data[i * n + j];
+                    }
+                }
             }
         }
         m

@@ -222,7 +222,7 @@ pub fn select(
 }
 
 /// Sets `keep` over every run of `false` (cyclic) no longer than `gap` that lies between kept vertices.
-fn close_gaps(keep: &mut [bool], gap: usize) {
+pub(crate) fn close_gaps(keep: &mut [bool], gap: usize) {
     let n = keep.len();
     if keep.iter().all(|&k| k) || !keep.iter().any(|&k| k) {
         return;
@@ -250,7 +250,7 @@ fn close_gaps(keep: &mut [bool], gap: usize) {
 
 /// Maximal runs of kept vertices along a closed loop, as vertex index lists in loop order. A fully kept loop
 /// comes back closed (its first vertex repeated at the end).
-fn cyclic_runs(keep: &[bool]) -> Vec<Vec<usize>> {
+pub(crate) fn cyclic_runs(keep: &[bool]) -> Vec<Vec<usize>> {
     let n = keep.len();
     if keep.iter().all(|&k| k) {
         let mut all: Vec<usize> = (0..n).collect();
@@ -277,7 +277,7 @@ fn cyclic_runs(keep: &[bool]) -> Vec<Vec<usize>> {
 }
 
 /// Splits a chain of cell centres wherever a step between neighbours would lose clearance.
-fn split_unsafe_steps(space: &CoverageSpace, pts: &[Point2]) -> Vec<Vec<Point2>> {
+pub(crate) fn split_unsafe_steps(space: &CoverageSpace, pts: &[Point2]) -> Vec<Vec<Point2>> {
     let mut out = Vec::new();
     let mut cur: Vec<Point2> = Vec::new();
     for &p in pts {

@@ -145,6 +145,10 @@ pub enum Placement {
     Lattice,
     /// Fitted to the region alone, evenly spaced.
     Fit,
+    /// Fitted and inset for a frame along the walls (`pattern::frame`): on a wall side the outermost lane
+    /// sits one tool width inside the region's outermost cells, and lane ends keep half a tool width more
+    /// clearance, so the frame covers the wall band and the lanes meet it edge to edge.
+    Framed,
 }
 
 /// Lanes along `angle`. `exact`: sample every half cell with the exact clearance and refine lane ends by
@@ -235,9 +239,18 @@ pub fn lanes_at(
     }
     // The alternative: lanes fitted to this region alone, evenly spaced at most `w` apart between its
     // outermost needed offsets. Better where the region's neighbours sweep in other directions.
+    let framed = placement == Placement::Framed;
     let fit = {
-        let mut v0 = (tmin + half).max(vlo).min(vhi);
-        let mut v1 = (tmax - half).min(vhi).max(vlo);
+        let (lo, hi) = if framed {
+            (
+                if wall_low { vmin + w } else { tmin + half },
+                if wall_high { vmax - w } else { tmax - half },
+            )
+        } else {
+            (tmin + half, tmax - half)
+        };
+        let mut v0 = lo.max(vlo).min(vhi);
+        let mut v1 = hi.min(vhi).max(vlo);
         if v1 < v0 {
             let m = 0.5 * (v0 + v1);
             (v0, v1) = (m, m);
@@ -252,9 +265,9 @@ pub fn lanes_at(
     };
     let offsets = match placement {
         Placement::Lattice => lattice,
-        Placement::Fit => fit,
+        Placement::Fit | Placement::Framed => fit,
     };
-    let end_clearance = space.robot.radius_m + margin;
+    let end_clearance = space.robot.radius_m + margin + if framed { half } else { 0.0 };
     let ok = |p: Point2| -> bool {
         match g.locate(p) {
             Some(c) => {

@@ -2,11 +2,13 @@
 //!
 //! A pattern turns one region into [`Task`]s — polylines the robot must drive, in either direction: the
 //! boustrophedon lanes ([`lanes`]), the rings of a spiral ([`spiral`]), and the targeted passes that cover
-//! what those miss ([`boundary`]: stretches of the wall contour, and single visits into pockets). Ordering
+//! what those miss ([`boundary`]: stretches of the wall contour, and single visits into pockets), and the
+//! frame along a region's walls that inset lanes leave to it ([`frame`]). Ordering
 //! the tasks and linking them is the job of `order` and `link`.
 
 pub mod boundary;
 pub mod contour;
+pub mod frame;
 pub mod lanes;
 pub mod spiral;
 
@@ -23,6 +25,8 @@ pub enum TaskKind {
     Boundary,
     /// A single point to visit, covering a pocket.
     Visit,
+    /// A stretch of a region's contour along walls, driven as part of the main pattern (framed lanes).
+    Frame,
 }
 
 /// A polyline to drive (map frame, metres). Open tasks may be driven in either direction; closed tasks

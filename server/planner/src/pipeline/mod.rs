@@ -12,6 +12,7 @@ use crate::metrics::{CoverageRaster, PlanMetrics, evaluate};
 use crate::order::{DistanceMatrix, OrderMethod, SolveBudget, TourOption, TourProblem};
 use crate::pattern::boundary::{PassParams, candidates, select};
 use crate::pattern::contour::trace_cells;
+use crate::pattern::frame::frame_tasks;
 use crate::pattern::lanes::{LaneParams, Placement, RegionView, plan_lanes};
 use crate::pattern::spiral::plan_rings;
 use crate::pattern::{PatternMethod, Task};
@@ -20,6 +21,10 @@ use route::{RegionRoute, region_options};
 
 /// Largest reachable set (cells) for which `auto` also tries one spiral over the undivided space.
 pub const AUTO_SPIRAL_MAX_CELLS: usize = 250_000;
+
+/// Largest reachable set (cells) on which lanes are also tried in the framed placement (each placement is
+/// a full plan; on large sites the third one costs more than it brings).
+pub const FRAMED_MAX_CELLS: usize = 1_000_000;
 
 /// Everything a plan request can choose. `Default` is the best combination.
 #[derive(Debug, Clone, PartialEq)]
@@ -146,7 +151,7 @@ impl PlanStats {
                 .map(Task::length)
                 .sum()
         };
-        let pattern_m = sum(&[TaskKind::Lane, TaskKind::Ring]);
+        let pattern_m = sum(&[TaskKind::Lane, TaskKind::Ring, TaskKind::Frame]);
         let passes_m = sum(&[TaskKind::Boundary]);
         let visits = tasks.iter().flatten().filter(|t| t.kind == TaskKind::Visit).count();
         Self {
@@ -176,6 +181,8 @@ pub struct PlanOutput {
     pub decomposition: DecompositionMethod,
     /// The pattern that produced this plan.
     pub pattern: PatternMethod,
+    /// The lane placement that produced this plan (`None` for patterns without lanes).
+    pub lane_placement: Option<Placement>,
     /// Remarks for the user.
     pub warnings: Vec<String>,
 }
@@ -188,39 +195,15 @@ impl PlanOutput {
 }
 
 /// Plans a full coverage of `space` from and back to its start. Without a fixed lane placement, plans with
-/// the map-wide lane lattice and with per-region fitted lanes (see [`Placement`]) and keeps the shorter plan
-/// of the two that meet the coverage target (the lattice wins ties).
+/// the map-wide lane lattice, with per-region fitted lanes and (up to [`FRAMED_MAX_CELLS`] reachable cells)
+/// with framed lanes (see [`Placement`]) and keeps the shortest plan that meets the coverage target (the
+/// lattice wins ties).
 pub fn plan(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanMonitor) -> Result<PlanOutput> {
     if params.decomposition == DecompositionMethod::Auto {
-        let mut best: Option<PlanOutput> = None;
-        let mut portfolio = vec![
-            (DecompositionMethod::Bcd, params.pattern),
-            (DecompositionMethod::Walls, params.pattern),
-        ];
         // The undivided spiral's routing and pass selection grow faster than linearly with the area (one
         // region holding every ring); on large sites it costs minutes, so it only joins below this size.
-        if space.reachable_count() <= AUTO_SPIRAL_MAX_CELLS {
-            portfolio.push((DecompositionMethod::Single, PatternMethod::Spiral));
-        }
-        for (d, pattern) in portfolio {
-            let out = plan(
-                space,
-                &PlanParams {
-                    decomposition: d,
-                    pattern,
-                    ..params.clone()
-                },
-                monitor,
-            )?;
-            let better = best.as_ref().is_none_or(|b| {
-                let ok = |o: &PlanOutput| o.metrics.collisions == 0 && o.metrics.coverage_pct >= 99.0;
-                (ok(&out), -out.metrics.length_m) > (ok(b), -b.metrics.length_m)
-            });
-            if better {
-                best = Some(out);
-            }
-        }
-        return best.ok_or(PlannerError::Cancelled);
+        let spiral = space.reachable_count() <= AUTO_SPIRAL_MAX_CELLS;
+        return auto(space, params, monitor, spiral);
     }
     if params.lanes.placement.is_some() || params.pattern != PatternMethod::Lanes {
         return plan_once(space, params, monitor);
@@ -232,16 +215,57 @@ pub fn plan(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanMo
         },
         ..params.clone()
     };
-    let lattice = plan_once(space, &with(Placement::Lattice), monitor)?;
-    let fit = plan_once(space, &with(Placement::Fit), monitor)?;
     let good = |o: &PlanOutput| {
         o.metrics.collisions == 0 && o.metrics.coverage_pct + 1e-9 >= params.passes.coverage_target_pct.min(99.0)
     };
-    Ok(match (good(&lattice), good(&fit)) {
-        (true, true) if fit.metrics.length_m + 1e-9 < lattice.metrics.length_m => fit,
-        (false, true) => fit,
-        _ => lattice,
-    })
+    // The first placement that meets the bar with the shortest path wins (earlier ones win ties).
+    let mut best = plan_once(space, &with(Placement::Lattice), monitor)?;
+    let placements: &[Placement] = if space.reachable_count() <= FRAMED_MAX_CELLS {
+        &[Placement::Fit, Placement::Framed]
+    } else {
+        &[Placement::Fit]
+    };
+    for &p in placements {
+        let out = plan_once(space, &with(p), monitor)?;
+        let better = match (good(&best), good(&out)) {
+            (true, true) => out.metrics.length_m + 1e-9 < best.metrics.length_m,
+            (false, true) => true,
+            _ => false,
+        };
+        if better {
+            best = out;
+        }
+    }
+    Ok(best)
+}
+
+/// The `auto` portfolio on `space`: bcd and walls in the requested pattern, and the undivided spiral when
+/// `spiral`; keeps the plan with the least overlap that meets the bar.
+fn auto(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanMonitor, spiral: bool) -> Result<PlanOutput> {
+    let mut best: Option<PlanOutput> = None;
+    let mut portfolio = vec![
+        (DecompositionMethod::Bcd, params.pattern),
+        (DecompositionMethod::Walls, params.pattern),
+    ];
+    if spiral {
+        portfolio.push((DecompositionMethod::Single, PatternMethod::Spiral));
+    }
+    for (d, pattern) in portfolio {
+        let member = PlanParams {
+            decomposition: d,
+            pattern,
+            ..params.clone()
+        };
+        let out = plan(space, &member, monitor)?;
+        let better = best.as_ref().is_none_or(|b| {
+            let ok = |o: &PlanOutput| o.metrics.collisions == 0 && o.metrics.coverage_pct >= 99.0;
+            (ok(&out), -out.metrics.overlap_pct) > (ok(b), -b.metrics.overlap_pct)
+        });
+        if better {
+            best = Some(out);
+        }
+    }
+    best.ok_or(PlannerError::Cancelled)
 }
 
 fn plan_once(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanMonitor) -> Result<PlanOutput> {
@@ -295,6 +319,11 @@ fn plan_once(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanM
     let mut angles = Vec::with_capacity(regions.count);
     for id in 0..regions.count {
         let (angle, t) = match params.pattern {
+            PatternMethod::Lanes if params.lanes.placement == Some(Placement::Framed) => {
+                let (angle, mut t) = plan_lanes(space, view(id), &params.lanes);
+                t.extend(frame_tasks(space, view(id)));
+                (angle, t)
+            }
             PatternMethod::Lanes => plan_lanes(space, view(id), &params.lanes),
             PatternMethod::Spiral => (0.0, plan_rings(space, view(id))),
         };
@@ -391,6 +420,15 @@ fn plan_once(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanM
     // Assemble: dock → region routes with links → dock.
     let mut path = Path::new(space.start);
     let mut linker = Linker::new(space, &params.link);
+    // Steps inside a region sweep as they go: they take the shortest way (no potential field), which also
+    // hugs the walls whose band they help to cover.
+    let mut step_linker = Linker::new(
+        space,
+        &LinkParams {
+            alpha: 0.0,
+            ..params.link
+        },
+    );
     let mut summaries = Vec::with_capacity(active.len());
     for (&k, &o) in tour.order.iter().zip(&tour.options) {
         let id = active[k];
@@ -400,7 +438,7 @@ fn plan_once(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanM
         }
         for leg in &route.legs {
             let pts = leg.points(&tasks[id]);
-            if path.cover_to(space, pts[0], id as u32, &mut linker, &mut warnings) {
+            if path.cover_to(space, pts[0], id as u32, &mut step_linker, &mut warnings) {
                 for &p in &pts[1..] {
                     path.push(p, WaypointKind::Cover, Some(id as u32));
                 }
@@ -424,6 +462,9 @@ fn plan_once(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanM
         warnings,
         decomposition: params.decomposition,
         pattern: params.pattern,
+        lane_placement: (params.pattern == PatternMethod::Lanes)
+            .then_some(params.lanes.placement)
+            .flatten(),
     })
 }
 

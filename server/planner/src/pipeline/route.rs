@@ -135,8 +135,26 @@ pub fn route_from(
     iterations: u64,
     stop: Option<&dyn Fn() -> bool>,
 ) -> RegionRoute {
-    let searched = route_search(tasks, entry, seed, iterations, stop);
+    let mut search = SearchProblem::new(tasks);
+    route_with(tasks, angle, entry, seed, iterations, stop, search.as_mut())
+}
+
+/// [`route_from`] with the search problem of the region's tasks built once for all its entries (`None`:
+/// too many points, sweep order only).
+fn route_with(
+    tasks: &[Task],
+    angle: f64,
+    entry: Point2,
+    seed: u64,
+    iterations: u64,
+    stop: Option<&dyn Fn() -> bool>,
+    search: Option<&mut SearchProblem>,
+) -> RegionRoute {
     let swept = route_sweep(tasks, angle, entry);
+    let Some(search) = search else {
+        return swept;
+    };
+    let searched = search.route(tasks, entry, seed, iterations, stop);
     if swept.cost + 1e-9 < searched.cost {
         swept
     } else {
@@ -146,7 +164,7 @@ pub fn route_from(
 
 /// Regions whose tasks offer more entry/exit points than this are routed by the sweep order alone (the
 /// search's dense distance matrix has the square of this many entries).
-pub const MAX_SEARCH_POINTS: usize = 1600;
+pub const MAX_SEARCH_POINTS: usize = 4000;
 
 /// Cost of driving `legs` from `entry`: task lengths plus straight connections.
 fn legs_cost(tasks: &[Task], entry: Point2, legs: &[Leg]) -> f64 {
@@ -240,68 +258,95 @@ fn route_sweep(tasks: &[Task], angle: f64, entry: Point2) -> RegionRoute {
     }
 }
 
-/// Local search over the tasks (generalised TSP, open tour from `entry`).
-fn route_search(
-    tasks: &[Task],
-    entry: Point2,
-    seed: u64,
-    iterations: u64,
-    stop: Option<&dyn Fn() -> bool>,
-) -> RegionRoute {
-    let mut points = vec![entry];
-    let mut legs_of: Vec<Vec<Leg>> = Vec::with_capacity(tasks.len());
-    let mut nodes = Vec::with_capacity(tasks.len());
-    for k in 0..tasks.len() {
-        let opts = task_options(tasks, k);
-        let len = tasks[k].length();
-        let mut node = Vec::new();
-        let mut legs = Vec::new();
-        for (entry_p, exit_p, leg) in &opts {
-            let e = points.len();
-            points.push(*entry_p);
-            points.push(*exit_p);
-            node.push(TourOption {
-                entry: e,
-                exit: e + 1,
-                cost: len,
-                reverse: 0,
-            });
-            legs.push(*leg);
+/// Local search over the tasks (generalised TSP, open tour from an entry): the problem is built once per
+/// region; only the entry (point 0) changes from one entry to the next.
+struct SearchProblem {
+    problem: TourProblem,
+    points: Vec<Point2>,
+    legs_of: Vec<Vec<Leg>>,
+}
+
+impl SearchProblem {
+    /// The problem of `tasks`, or `None` when their options have more than [`MAX_SEARCH_POINTS`] points.
+    fn new(tasks: &[Task]) -> Option<Self> {
+        let count: usize = (0..tasks.len()).map(|k| 2 * task_options(tasks, k).len()).sum();
+        if count > MAX_SEARCH_POINTS {
+            return None;
         }
-        // Reverse pairs: options come in (forward, backward) pairs.
-        for (j, o) in node.iter_mut().enumerate() {
-            o.reverse = j ^ 1;
+        let mut points = vec![Point2::origin()];
+        let mut legs_of: Vec<Vec<Leg>> = Vec::with_capacity(tasks.len());
+        let mut nodes = Vec::with_capacity(tasks.len());
+        for k in 0..tasks.len() {
+            let opts = task_options(tasks, k);
+            let len = tasks[k].length();
+            let mut node = Vec::new();
+            let mut legs = Vec::new();
+            for (entry_p, exit_p, leg) in &opts {
+                let e = points.len();
+                points.push(*entry_p);
+                points.push(*exit_p);
+                node.push(TourOption {
+                    entry: e,
+                    exit: e + 1,
+                    cost: len,
+                    reverse: 0,
+                });
+                legs.push(*leg);
+            }
+            // Reverse pairs: options come in (forward, backward) pairs.
+            for (j, o) in node.iter_mut().enumerate() {
+                o.reverse = j ^ 1;
+            }
+            nodes.push(node);
+            legs_of.push(legs);
         }
-        nodes.push(node);
-        legs_of.push(legs);
+        let dist = DistanceMatrix::from_fn(points.len(), |i, j| (points[i] - points[j]).norm());
+        Some(Self {
+            problem: TourProblem {
+                dist,
+                depot: 0,
+                nodes,
+                closed: false,
+            },
+            points,
+            legs_of,
+        })
     }
-    let dist = DistanceMatrix::from_fn(points.len(), |i, j| (points[i] - points[j]).norm());
-    let problem = TourProblem {
-        dist,
-        depot: 0,
-        nodes,
-        closed: false,
-    };
-    let tour = OrderMethod::TwoOpt.orderer().solve(
-        &problem,
-        seed,
-        &SolveBudget {
-            max_iterations: iterations,
-            stop,
-        },
-    );
-    let legs: Vec<Leg> = tour
-        .order
-        .iter()
-        .zip(&tour.options)
-        .map(|(&n, &o)| legs_of[n][o])
-        .collect();
-    let exit = legs.last().map_or(entry, |l| *l.points(tasks).last().unwrap_or(&entry));
-    RegionRoute {
-        legs,
-        entry,
-        exit,
-        cost: tour.cost,
+
+    /// The searched route from `entry`.
+    fn route(
+        &mut self,
+        tasks: &[Task],
+        entry: Point2,
+        seed: u64,
+        iterations: u64,
+        stop: Option<&dyn Fn() -> bool>,
+    ) -> RegionRoute {
+        self.points[0] = entry;
+        for j in 1..self.points.len() {
+            self.problem.dist.set(0, j, (self.points[j] - entry).norm());
+        }
+        let tour = OrderMethod::TwoOpt.orderer().solve(
+            &self.problem,
+            seed,
+            &SolveBudget {
+                max_iterations: iterations,
+                stop,
+            },
+        );
+        let legs: Vec<Leg> = tour
+            .order
+            .iter()
+            .zip(&tour.options)
+            .map(|(&n, &o)| self.legs_of[n][o])
+            .collect();
+        let exit = legs.last().map_or(entry, |l| *l.points(tasks).last().unwrap_or(&entry));
+        RegionRoute {
+            legs,
+            entry,
+            exit,
+            cost: tour.cost,
+        }
     }
 }
 
@@ -336,8 +381,9 @@ pub fn region_options(
     stop: Option<&dyn Fn() -> bool>,
 ) -> Vec<RegionRoute> {
     let mut out: Vec<RegionRoute> = Vec::new();
+    let mut search = SearchProblem::new(tasks);
     for e in corner_entries(tasks, angle) {
-        let r = route_from(tasks, angle, e, seed, iterations, stop);
+        let r = route_with(tasks, angle, e, seed, iterations, stop, search.as_mut());
         let back = r.reversed();
         out.push(r);
         out.push(back);
