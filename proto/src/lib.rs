@@ -13,10 +13,10 @@ pub mod ros;
 pub mod scene;
 
 pub use api::{
-    AssignRequest, ErrorBody, ErrorDetail, PlanAccepted, PlanEvent, PlanOptions, PlanRequest,
-    PlanStatus, PlanStatusResponse, RegionReady, RobotSpec, RobotView, PoseView, SiteSummary, SpeedProfileResponse, SpeedSample,
+    AssignRequest, ErrorBody, ErrorDetail, PlanAccepted, PlanEvent, PlanOptions, PlanRequest, PlanStatus,
+    PlanStatusResponse, PoseView, RegionReady, RobotSpec, RobotView, SiteSummary, SpeedProfileResponse, SpeedSample,
 };
-pub use error::CodecError;
 pub use attribute::{AttributeBlobDoc, AttributeDoc};
+pub use error::CodecError;
 pub use plan::{PlanDocument, PlanMetricsDoc, RegionDoc, WaypointDoc, WaypointKindDoc};
 pub use scene::SceneFile;

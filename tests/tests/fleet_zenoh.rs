@@ -5,11 +5,11 @@ use std::time::Duration;
 
 use anyhow::{Context, Result, anyhow};
 use serde_json::{Value, json};
+use shift_proto::PlanDocument;
 use shift_proto::ros::odometry::{Odometry, encode_odometry};
 use shift_proto::ros::path::decode_path;
 use shift_proto::ros::point_cloud2::encode_point_cloud2_xyz;
 use shift_proto::ros::{Header, Time};
-use shift_proto::PlanDocument;
 use shift_tests::{TestServer, demo_request, test_config};
 use zenoh::bytes::Encoding;
 
@@ -62,6 +62,10 @@ async fn poll<T>(mut f: impl AsyncFnMut() -> Result<Option<T>>, what: &str) -> R
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn robot_streams_gets_its_plan_and_is_lost_when_its_token_drops() -> Result<()> {
+    let _ = tracing_subscriber::fmt()
+        .with_env_filter(tracing_subscriber::EnvFilter::new("warn,shiftd=info"))
+        .with_test_writer()
+        .try_init();
     let dir = tempfile::tempdir()?;
     let port = free_port()?;
     let endpoint = format!("tcp/127.0.0.1:{port}");
@@ -70,9 +74,19 @@ async fn robot_streams_gets_its_plan_and_is_lost_when_its_token_drops() -> Resul
     let server = TestServer::start(config).await?;
 
     let robot = robot_session(&endpoint).await?;
-    let token = robot.liveliness().declare_token("shift/default/robots/r1/alive").await.map_err(|e| anyhow!("{e}"))?;
-    let plans = robot.declare_subscriber("shift/default/robots/r1/plan").await.map_err(|e| anyhow!("{e}"))?;
-    let paths = robot.declare_subscriber("shift/default/robots/r1/plan_path").await.map_err(|e| anyhow!("{e}"))?;
+    let token = robot
+        .liveliness()
+        .declare_token("shift/default/robots/r1/alive")
+        .await
+        .map_err(|e| anyhow!("{e}"))?;
+    let plans = robot
+        .declare_subscriber("shift/default/robots/r1/plan")
+        .await
+        .map_err(|e| anyhow!("{e}"))?;
+    let paths = robot
+        .declare_subscriber("shift/default/robots/r1/plan_path")
+        .await
+        .map_err(|e| anyhow!("{e}"))?;
 
     // The robot is seen alive.
     poll(
@@ -94,13 +108,17 @@ async fn robot_streams_gets_its_plan_and_is_lost_when_its_token_drops() -> Resul
     for i in 0..20 {
         for j in 0..20 {
             for k in 0..3 {
-                pts.push([4.0 + i as f32 * 0.02, 4.0 + j as f32 * 0.02, 0.2 + k as f32 * 0.2]);
+                // Cell-centred so no point sits on a voxel boundary.
+                pts.push([4.01 + i as f32 * 0.02, 4.01 + j as f32 * 0.02, 0.21 + k as f32 * 0.2]);
             }
         }
     }
     pts.push([4.0, 4.0, 0.0]); // floor: not an obstacle
     robot
-        .put("shift/default/robots/r1/cloud", encode_point_cloud2_xyz(&header("map", 1), &pts))
+        .put(
+            "shift/default/robots/r1/cloud",
+            encode_point_cloud2_xyz(&header("map", 1), &pts),
+        )
         .encoding(Encoding::APPLICATION_CDR)
         .await
         .map_err(|e| anyhow!("{e}"))?;
@@ -121,22 +139,33 @@ async fn robot_streams_gets_its_plan_and_is_lost_when_its_token_drops() -> Resul
     let (_, acc) = server.post("/v1/plans", &demo_request()).await?;
     let id = acc["plan_id"].as_str().context("id")?.to_owned();
     server.wait_plan(&id, LONG, |s| s == "ready").await?;
-    let (code, st) = server.post(&format!("/v1/plans/{id}/assign"), &json!({"robot": "r1"})).await?;
+    let (code, st) = server
+        .post(&format!("/v1/plans/{id}/assign"), &json!({"robot": "r1"}))
+        .await?;
     assert_eq!(code, 200, "{st}");
     assert_eq!(st["status"], "active");
     let (_, served) = server.get(&format!("/v1/plans/{id}/path")).await?;
-    let sample = tokio::time::timeout(LONG, plans.recv_async()).await?.map_err(|e| anyhow!("{e}"))?;
+    let sample = tokio::time::timeout(LONG, plans.recv_async())
+        .await?
+        .map_err(|e| anyhow!("{e}"))?;
     let got: Value = serde_json::from_slice(&sample.payload().to_bytes())?;
     assert_eq!(got, served, "the published plan is the served one");
-    let sample = tokio::time::timeout(LONG, paths.recv_async()).await?.map_err(|e| anyhow!("{e}"))?;
+    let sample = tokio::time::timeout(LONG, paths.recv_async())
+        .await?
+        .map_err(|e| anyhow!("{e}"))?;
     let path = decode_path(&sample.payload().to_bytes())?;
     let doc: PlanDocument = serde_json::from_value(served.clone())?;
     assert_eq!(path.poses.len(), doc.waypoints.len());
 
     // A robot that joins late asks for its plan.
     let late = robot_session(&endpoint).await?;
-    let replies = late.get("shift/default/robots/r1/plan").await.map_err(|e| anyhow!("{e}"))?;
-    let reply = tokio::time::timeout(LONG, replies.recv_async()).await?.map_err(|e| anyhow!("{e}"))?;
+    let replies = late
+        .get("shift/default/robots/r1/plan")
+        .await
+        .map_err(|e| anyhow!("{e}"))?;
+    let reply = tokio::time::timeout(LONG, replies.recv_async())
+        .await?
+        .map_err(|e| anyhow!("{e}"))?;
     let sample = reply.result().map_err(|e| anyhow!("query error {e:?}"))?;
     let fetched: Value = serde_json::from_slice(&sample.payload().to_bytes())?;
     assert_eq!(fetched, served);
@@ -145,7 +174,10 @@ async fn robot_streams_gets_its_plan_and_is_lost_when_its_token_drops() -> Resul
     let mid = &doc.waypoints[doc.waypoints.len() / 8];
     for (n, w) in doc.waypoints.iter().take(doc.waypoints.len() / 8 + 1).enumerate() {
         robot
-            .put("shift/default/robots/r1/odom", encode_odometry(&odom(w.x, w.y, 2 + n as i32)))
+            .put(
+                "shift/default/robots/r1/odom",
+                encode_odometry(&odom(w.x, w.y, 2 + n as i32)),
+            )
             .encoding(Encoding::APPLICATION_CDR)
             .await
             .map_err(|e| anyhow!("{e}"))?;
@@ -159,8 +191,19 @@ async fn robot_streams_gets_its_plan_and_is_lost_when_its_token_drops() -> Resul
     )
     .await?;
     assert_eq!(st["robot"], "r1");
-    let r = server.get("/v1/robots/r1").await?.1;
-    assert!((r["pose"]["x"].as_f64().unwrap_or(0.0) - mid.x).abs() < 1e-9);
+    // The last pose sent arrives (in order, after the others).
+    let (mx, my) = (mid.x, mid.y);
+    let r = poll(
+        async || {
+            let (_, r) = server.get("/v1/robots/r1").await?;
+            let at = |k: &str| r["pose"][k].as_f64().unwrap_or(f64::NAN);
+            Ok(((at("x") - mx).abs() < 1e-9 && (at("y") - my).abs() < 1e-9).then_some(r))
+        },
+        "the last pose",
+    )
+    .await?;
+    assert_eq!(r["plan_id"], id.as_str());
+    assert!(r["driven_m"].as_f64().unwrap_or(0.0) > 0.0, "{r}");
 
     // The token goes: the robot is lost.
     token.undeclare().await.map_err(|e| anyhow!("{e}"))?;

@@ -72,7 +72,7 @@ struct PlanArgs {
     /// Tool width, metres.
     #[arg(long)]
     tool_width: Option<f64>,
-    /// Decomposition: auto (the shortest of bcd, walls and one undivided spiral), bcd, walls, voronoi, grid, none.
+    /// Decomposition: auto (of bcd, walls and one undivided spiral, the plan with the least overlap that covers ≥ 99 %), bcd, walls, voronoi, grid, none.
     #[arg(long, default_value = "auto")]
     decomposition: DecompositionMethod,
     /// Visiting order solver: two-opt, rrt, anneal.

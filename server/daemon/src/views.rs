@@ -66,7 +66,10 @@ impl Views {
 
     /// Every robot.
     pub fn robots(&self) -> Vec<RobotView> {
-        self.robots.read().map(|r| r.values().cloned().collect()).unwrap_or_default()
+        self.robots
+            .read()
+            .map(|r| r.values().cloned().collect())
+            .unwrap_or_default()
     }
 
     /// The document of the plan a robot drives.

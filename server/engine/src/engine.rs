@@ -318,7 +318,14 @@ impl Engine {
         Ok(())
     }
 
-    fn assign(&mut self, plan_id: &str, robot: &str, doc: Arc<PlanDocument>, now_ms: u64, out: &mut Vec<Command>) -> Result<()> {
+    fn assign(
+        &mut self,
+        plan_id: &str,
+        robot: &str,
+        doc: Arc<PlanDocument>,
+        now_ms: u64,
+        out: &mut Vec<Command>,
+    ) -> Result<()> {
         validate_name("robot", robot)?;
         let rec = self
             .plans

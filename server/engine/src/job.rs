@@ -134,14 +134,17 @@ mod tests {
             request,
             options,
         };
-        let (_, out) = run_job(&job, &mut NoMonitor).expect("plans");
-        assert!(out.metrics.coverage_pct >= 99.0, "{:?}", out.metrics);
-        assert_eq!(out.metrics.collisions, 0);
-        for w in &out.waypoints {
+        let res = run_job(&job, &mut NoMonitor).expect("plans");
+        let m = res.profile.metrics;
+        assert!(m.coverage_pct >= 99.0, "{m:?}");
+        assert_eq!(m.collisions, 0);
+        for w in &res.profile.waypoints {
+            let p = w.waypoint.position;
+            assert!(point_in_polygon(p, &poly), "{p:?} leaves the region");
             assert!(
-                point_in_polygon(w.position, &poly),
-                "{:?} leaves the region",
-                w.position
+                w.speed_mps >= 0.1 - 1e-9 && w.speed_mps <= 1.0 + 1e-9,
+                "{}",
+                w.speed_mps
             );
         }
     }

@@ -97,7 +97,11 @@ impl LiveMap {
 
     fn key(&self, p: &Point3) -> VoxelKey {
         let v = self.params.voxel_m;
-        ((p.x / v).floor() as i32, (p.y / v).floor() as i32, (p.z / v).floor() as i32)
+        (
+            (p.x / v).floor() as i32,
+            (p.y / v).floor() as i32,
+            (p.z / v).floor() as i32,
+        )
     }
 
     /// Adds obstacle points given in the map frame, metres. `planar` (2-D scans) skips the height band.
@@ -192,9 +196,9 @@ mod tests {
         let pts = [
             [1.02, 1.02, 0.52], // kept
             [1.03, 1.03, 0.53], // same 5 cm voxel: down-sampled away
-            [1.0, 1.0, 0.01], // floor
-            [1.0, 1.0, 3.0],  // overhead
-            [20.0, 1.0, 0.5], // outside the site
+            [1.0, 1.0, 0.01],   // floor
+            [1.0, 1.0, 3.0],    // overhead
+            [20.0, 1.0, 0.5],   // outside the site
             [f64::NAN, 1.0, 0.5],
         ];
         let r = m.ingest(&pts, false, 10);
@@ -209,7 +213,9 @@ mod tests {
     #[test]
     fn cap_drops_and_counts() {
         let mut m = map();
-        let pts: Vec<[f64; 3]> = (0..150).map(|i| [0.1 + (i % 15) as f64 * 0.5, 0.1 + (i / 15) as f64 * 0.5, 0.5]).collect();
+        let pts: Vec<[f64; 3]> = (0..150)
+            .map(|i| [0.1 + (i % 15) as f64 * 0.5, 0.1 + (i / 15) as f64 * 0.5, 0.5])
+            .collect();
         let r = m.ingest(&pts, false, 1);
         assert_eq!(r.over_cap, 50);
         assert_eq!(m.tree().len(), 100);

@@ -166,7 +166,15 @@ mod tests {
     #[test]
     fn progress_follows_the_path_in_order_even_where_it_crosses_itself() {
         // Out along y = 0 and back along the same line.
-        let pts = [(0.0, 0.0), (1.0, 0.0), (2.0, 0.0), (3.0, 0.0), (2.0, 0.0), (1.0, 0.0), (0.0, 0.0)];
+        let pts = [
+            (0.0, 0.0),
+            (1.0, 0.0),
+            (2.0, 0.0),
+            (3.0, 0.0),
+            (2.0, 0.0),
+            (1.0, 0.0),
+            (0.0, 0.0),
+        ];
         let mut a = Assignment::new("p-1".into(), doc(&pts));
         assert!(a.advance(1.0, 0.05, 0.3, 2));
         assert_eq!(a.index, 1, "the outbound (1,0), not the return one");

@@ -67,7 +67,8 @@ impl ZenohConfig {
         let list = |v: &[String]| serde_json::to_string(v).unwrap_or_else(|_| "[]".into());
         let mut c = zenoh::Config::default();
         let set = |c: &mut zenoh::Config, k: &str, v: &str| {
-            c.insert_json5(k, v).map_err(|e| anyhow::anyhow!("zenoh config {k} = {v}: {e}"))
+            c.insert_json5(k, v)
+                .map_err(|e| anyhow::anyhow!("zenoh config {k} = {v}: {e}"))
         };
         set(&mut c, "mode", &format!("{:?}", self.mode))?;
         set(&mut c, "listen/endpoints", &list(&self.listen))?;

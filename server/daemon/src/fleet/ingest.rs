@@ -104,7 +104,9 @@ impl Ingest {
         let mut q = self.queues.lock().ok()?;
         loop {
             while let Some(robot) = q.ready.pop_front() {
-                let Some(queue) = q.per_robot.get_mut(&robot) else { continue };
+                let Some(queue) = q.per_robot.get_mut(&robot) else {
+                    continue;
+                };
                 if let Some(c) = queue.pop_front() {
                     if !queue.is_empty() {
                         q.ready.push_back(robot);
@@ -177,6 +179,12 @@ impl Ingest {
             Err(_) => return Err("live map lock poisoned".into()),
         };
         live.mark_update(now);
+        tracing::debug!(
+            robot = cloud.robot,
+            offered = report.offered,
+            inserted = report.inserted,
+            "cloud ingested"
+        );
         metrics::counter!("shift_ingest_clouds_total").increment(1);
         metrics::counter!("shift_ingest_points_total").increment(report.offered as u64);
         metrics::histogram!("shift_ingest_latency_seconds").record(cloud.received.elapsed().as_secs_f64());

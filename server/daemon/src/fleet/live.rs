@@ -37,7 +37,10 @@ impl SiteLive {
     /// Clouds per second over the last window.
     pub fn updates_per_s(&self, now_ms: u64) -> f64 {
         self.recent_ms.lock().map_or(0.0, |q| {
-            let n = q.iter().filter(|&&t| now_ms.saturating_sub(t) <= RATE_WINDOW_MS).count();
+            let n = q
+                .iter()
+                .filter(|&&t| now_ms.saturating_sub(t) <= RATE_WINDOW_MS)
+                .count();
             n as f64 / (RATE_WINDOW_MS as f64 / 1e3)
         })
     }

@@ -37,7 +37,9 @@ pub struct PlanPublisher {
 
 impl std::fmt::Debug for PlanPublisher {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("PlanPublisher").field("keys", &self.keys).finish_non_exhaustive()
+        f.debug_struct("PlanPublisher")
+            .field("keys", &self.keys)
+            .finish_non_exhaustive()
     }
 }
 
@@ -46,7 +48,11 @@ fn path_poses(doc: &PlanDocument) -> Vec<(f64, f64, f64)> {
     let w = &doc.waypoints;
     (0..w.len())
         .map(|i| {
-            let (a, b) = if i + 1 < w.len() { (i, i + 1) } else { (i.saturating_sub(1), i) };
+            let (a, b) = if i + 1 < w.len() {
+                (i, i + 1)
+            } else {
+                (i.saturating_sub(1), i)
+            };
             let yaw = (w[b].y - w[a].y).atan2(w[b].x - w[a].x);
             (w[i].x, w[i].y, if yaw.is_finite() { yaw } else { 0.0 })
         })
@@ -151,7 +157,9 @@ impl Fleet {
                     () = s.cancelled() => break,
                     r = sub.recv_async() => match r { Ok(x) => x, Err(_) => break },
                 };
-                let Some((robot, Stream::Odom)) = k.robot_of(sample.key_expr().as_str()) else { continue };
+                let Some((robot, Stream::Odom)) = k.robot_of(sample.key_expr().as_str()) else {
+                    continue;
+                };
                 let encoding = sample.encoding().to_string();
                 match decode_odom_payload(&sample.payload().to_bytes(), Some(&encoding)) {
                     Ok(p) => {
@@ -182,7 +190,9 @@ impl Fleet {
                     () = s.cancelled() => break,
                     r = sub.recv_async() => match r { Ok(x) => x, Err(_) => break },
                 };
-                let Some((robot, Stream::Cloud)) = k.robot_of(sample.key_expr().as_str()) else { continue };
+                let Some((robot, Stream::Cloud)) = k.robot_of(sample.key_expr().as_str()) else {
+                    continue;
+                };
                 ing.push(RawCloud {
                     robot,
                     bytes: sample.payload().to_bytes().into_owned(),
@@ -205,7 +215,9 @@ impl Fleet {
                     () = s.cancelled() => break,
                     r = sub.recv_async() => match r { Ok(x) => x, Err(_) => break },
                 };
-                let Some((robot, Stream::Alive)) = k.robot_of(sample.key_expr().as_str()) else { continue };
+                let Some((robot, Stream::Alive)) = k.robot_of(sample.key_expr().as_str()) else {
+                    continue;
+                };
                 let alive = sample.kind() == SampleKind::Put;
                 tracing::info!(robot, alive, "robot liveliness");
                 let _ = b.tell(Msg::event(Event::RobotLiveliness { robot, alive })).await;
@@ -221,7 +233,9 @@ impl Fleet {
                     () = s.cancelled() => break,
                     r = queryable.recv_async() => match r { Ok(x) => x, Err(_) => break },
                 };
-                let Some(robot) = k.robot_of_plan(query.key_expr().as_str()) else { continue };
+                let Some(robot) = k.robot_of_plan(query.key_expr().as_str()) else {
+                    continue;
+                };
                 let Some(doc) = v.robot_plan(&robot) else { continue };
                 let Ok(json) = serde_json::to_vec(&*doc) else { continue };
                 let Ok(plan_key) = k.plan(&robot) else { continue };

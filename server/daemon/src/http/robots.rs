@@ -27,7 +27,10 @@ pub async fn assign_plan(
         ApiError::new(
             StatusCode::CONFLICT,
             "invalid_state",
-            format!("plan {id} is {}; only a computed plan can be assigned", view.record.status.as_str()),
+            format!(
+                "plan {id} is {}; only a computed plan can be assigned",
+                view.record.status.as_str()
+            ),
         )
     })?;
     let reply = state

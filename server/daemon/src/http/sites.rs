@@ -99,9 +99,10 @@ pub async fn get_site(
     State(state): State<AppState>,
     Path(site): Path<String>,
 ) -> Result<ApiJson<SiteSummary>, ApiError> {
-    state
+    let mut summary = state
         .views
         .site(&site)
-        .map(ApiJson)
-        .ok_or_else(|| ApiError::not_found(format!("unknown site {site:?}")))
+        .ok_or_else(|| ApiError::not_found(format!("unknown site {site:?}")))?;
+    state.live.annotate(&mut summary, now_ms());
+    Ok(ApiJson(summary))
 }

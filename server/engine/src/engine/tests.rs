@@ -379,7 +379,10 @@ fn assign_tracks_progress_to_done_and_moves_between_robots() {
             3,
         )
         .expect("assigned");
-    assert!(c.iter().any(|c| matches!(c, Command::PublishPlan { robot, .. } if robot == "r1")));
+    assert!(
+        c.iter()
+            .any(|c| matches!(c, Command::PublishPlan { robot, .. } if robot == "r1"))
+    );
     assert_eq!(stored(&c), vec![("p-1".into(), PlanStatus::Active)]);
     let pose = |x: f64| Pose2 {
         x,
