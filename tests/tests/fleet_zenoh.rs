@@ -38,9 +38,11 @@ fn header(frame: &str, sec: i32) -> Header {
 }
 
 fn odom(x: f64, y: f64, sec: i32) -> Odometry {
-    let mut o = Odometry::default();
-    o.header = header("map", sec);
-    o.child_frame_id = "base_link".into();
+    let mut o = Odometry {
+        header: header("map", sec),
+        child_frame_id: "base_link".into(),
+        ..Odometry::default()
+    };
     o.pose.pose.position.x = x;
     o.pose.pose.position.y = y;
     o.pose.pose.orientation.w = 1.0;
