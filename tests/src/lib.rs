@@ -53,8 +53,13 @@ impl TestServer {
             stop,
             task,
         };
-        // Ready once /readyz answers.
-        for _ in 0..200 {
+        // Ready once /readyz answers (parallel tests on a loaded 2-core machine can take seconds); a server
+        // that stopped on its own reports why.
+        for _ in 0..2400 {
+            if server.task.is_finished() {
+                let err = server.task.await.map_err(anyhow::Error::from).and_then(|r| r);
+                bail!("shiftd stopped while starting: {err:?}");
+            }
             if let Ok(r) = server.http.get(server.url("/readyz")).send().await
                 && r.status().is_success()
             {
@@ -62,7 +67,7 @@ impl TestServer {
             }
             tokio::time::sleep(Duration::from_millis(25)).await;
         }
-        bail!("shiftd did not become ready")
+        bail!("shiftd did not become ready within 60 s")
     }
 
     /// Full URL of a path.

@@ -6,7 +6,7 @@
 //! start computes them); stop the engine thread.
 
 use std::future::Future;
-use std::sync::{Arc, OnceLock};
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use anyhow::{Context, Result, anyhow};
@@ -30,8 +30,10 @@ const DEMO_IMAGE: &[u8] = include_bytes!("../../../tests/fixtures/four-rooms-obs
 /// The process-wide Prometheus recorder (the `metrics` facade has one global recorder; servers started
 /// in one process, as tests do, share it).
 pub fn prometheus() -> Result<PrometheusHandle> {
-    static HANDLE: OnceLock<PrometheusHandle> = OnceLock::new();
-    if let Some(h) = HANDLE.get() {
+    // A mutex, not a OnceLock check-then-set: two servers starting at once must not both install.
+    static HANDLE: Mutex<Option<PrometheusHandle>> = Mutex::new(None);
+    let mut slot = HANDLE.lock().map_err(|_| anyhow!("prometheus handle lock poisoned"))?;
+    if let Some(h) = slot.as_ref() {
         return Ok(h.clone());
     }
     let latency = [
@@ -42,7 +44,8 @@ pub fn prometheus() -> Result<PrometheusHandle> {
         .map_err(|e| anyhow!("prometheus buckets: {e}"))?
         .install_recorder()
         .map_err(|e| anyhow!("prometheus recorder: {e}"))?;
-    Ok(HANDLE.get_or_init(|| handle).clone())
+    *slot = Some(handle.clone());
+    Ok(handle)
 }
 
 /// Serves until `shutdown` completes, then drains as described in the module docs.
