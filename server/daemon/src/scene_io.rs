@@ -3,9 +3,8 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
-use shift_planner::geom::Point2;
 use shift_planner::map::{GridGeometry, LoadedMap, load_ros_map};
-use shift_planner::speed::{AttributeBlob, AttributeMap};
+use shift_planner::speed::AttributeMap;
 use shift_proto::{AttributeDoc, SceneFile};
 
 /// A scene read from a folder: the scene file, the loaded map and where it came from.
@@ -71,16 +70,7 @@ pub fn load_attribute(path: &Path, geometry: GridGeometry) -> Result<AttributeMa
     let map = if is_json {
         let doc: AttributeDoc =
             serde_json::from_slice(&bytes).with_context(|| format!("parsing attribute {}", path.display()))?;
-        let blobs: Vec<AttributeBlob> = doc
-            .blobs
-            .iter()
-            .map(|b| AttributeBlob {
-                centre: Point2::new(b.x, b.y),
-                sigma_m: b.sigma,
-                amplitude: b.amplitude,
-            })
-            .collect();
-        AttributeMap::from_blobs(geometry, &blobs)
+        shift_engine::attribute_map(&doc, geometry)
     } else {
         AttributeMap::from_image_bytes(geometry, &bytes)
     };

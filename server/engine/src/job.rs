@@ -4,12 +4,12 @@
 use std::sync::Arc;
 
 use shift_planner::geom::Point2;
-use shift_planner::map::grid::{CellState, OccupancyGrid};
+use shift_planner::map::grid::{CellState, GridGeometry, OccupancyGrid};
 use shift_planner::pipeline::{PlanMonitor, PlanOutput, PlanParams, plan};
 use shift_planner::space::{CoverageSpace, RobotShape};
 use shift_planner::speed::attribute::{AttributeBlob, AttributeMap};
 use shift_planner::speed::{SpeedLimits, SpeedParams, SpeedProfile, profile_path};
-use shift_proto::PlanRequest;
+use shift_proto::{AttributeDoc, PlanRequest};
 
 use crate::request::{ParsedOptions, point_in_polygon};
 
@@ -24,6 +24,20 @@ pub struct PlanJob {
     pub request: PlanRequest,
     /// Its parsed options.
     pub options: ParsedOptions,
+}
+
+/// The planner's attribute map from wire blobs (`POST /v1/plans` `attribute`, `shiftd plan --attribute x.json`).
+pub fn attribute_map(doc: &AttributeDoc, geometry: GridGeometry) -> shift_planner::Result<AttributeMap> {
+    let blobs: Vec<AttributeBlob> = doc
+        .blobs
+        .iter()
+        .map(|b| AttributeBlob {
+            centre: Point2::new(b.x, b.y),
+            sigma_m: b.sigma,
+            amplitude: b.amplitude,
+        })
+        .collect();
+    AttributeMap::from_blobs(geometry, &blobs)
 }
 
 /// A computed job: the planner's output and its smoothed, timed speed profile.
@@ -74,18 +88,7 @@ pub fn run_job(job: &PlanJob, monitor: &mut dyn PlanMonitor) -> shift_planner::R
         return Err(shift_planner::PlannerError::Cancelled);
     }
     let attribute = match &job.request.attribute {
-        Some(a) => {
-            let blobs: Vec<AttributeBlob> = a
-                .blobs
-                .iter()
-                .map(|b| AttributeBlob {
-                    centre: Point2::new(b.x, b.y),
-                    sigma_m: b.sigma,
-                    amplitude: b.amplitude,
-                })
-                .collect();
-            Some(AttributeMap::from_blobs(space.grid.geometry, &blobs)?)
-        }
+        Some(a) => Some(attribute_map(a, space.grid.geometry)?),
         None => None,
     };
     let limits = SpeedLimits::new(r.v_min, r.v_max, r.a_max);

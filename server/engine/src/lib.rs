@@ -17,7 +17,7 @@ pub mod site;
 
 pub use engine::{Command, Engine, EngineConfig, Event, JobOutcome};
 pub use error::EngineError;
-pub use job::{JobResult, PlanJob, run_job};
+pub use job::{JobResult, PlanJob, attribute_map, run_job};
 pub use live_map::{LiveMap, LiveMapParams, LiveMapStats};
 pub use plan::PlanRecord;
 pub use robots::Pose2;

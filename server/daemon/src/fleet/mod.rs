@@ -88,6 +88,17 @@ impl PlanPublisher {
     }
 }
 
+/// The next item of a zenoh receiver, or `None` once `stop` is cancelled or the receiver closed.
+async fn next_or_stop<T, E>(
+    stop: &CancellationToken,
+    recv: impl std::future::Future<Output = Result<T, E>>,
+) -> Option<T> {
+    tokio::select! {
+        () = stop.cancelled() => None,
+        r = recv => r.ok(),
+    }
+}
+
 /// The running fleet bridge.
 pub struct Fleet {
     session: zenoh::Session,
@@ -153,9 +164,8 @@ impl Fleet {
         let (k, b, s) = (keys.clone(), brain.clone(), stop.clone());
         tasks.push(tokio::spawn(async move {
             loop {
-                let sample = tokio::select! {
-                    () = s.cancelled() => break,
-                    r = sub.recv_async() => match r { Ok(x) => x, Err(_) => break },
+                let Some(sample) = next_or_stop(&s, sub.recv_async()).await else {
+                    break;
                 };
                 let Some((robot, Stream::Odom)) = k.robot_of(sample.key_expr().as_str()) else {
                     continue;
@@ -186,9 +196,8 @@ impl Fleet {
         let (k, ing, s) = (keys.clone(), ingest.clone(), stop.clone());
         tasks.push(tokio::spawn(async move {
             loop {
-                let sample = tokio::select! {
-                    () = s.cancelled() => break,
-                    r = sub.recv_async() => match r { Ok(x) => x, Err(_) => break },
+                let Some(sample) = next_or_stop(&s, sub.recv_async()).await else {
+                    break;
                 };
                 let Some((robot, Stream::Cloud)) = k.robot_of(sample.key_expr().as_str()) else {
                     continue;
@@ -211,9 +220,8 @@ impl Fleet {
         let (k, b, s) = (keys.clone(), brain.clone(), stop.clone());
         tasks.push(tokio::spawn(async move {
             loop {
-                let sample = tokio::select! {
-                    () = s.cancelled() => break,
-                    r = sub.recv_async() => match r { Ok(x) => x, Err(_) => break },
+                let Some(sample) = next_or_stop(&s, sub.recv_async()).await else {
+                    break;
                 };
                 let Some((robot, Stream::Alive)) = k.robot_of(sample.key_expr().as_str()) else {
                     continue;
@@ -229,9 +237,8 @@ impl Fleet {
         let (k, v, s) = (keys.clone(), views, stop.clone());
         tasks.push(tokio::spawn(async move {
             loop {
-                let query = tokio::select! {
-                    () = s.cancelled() => break,
-                    r = queryable.recv_async() => match r { Ok(x) => x, Err(_) => break },
+                let Some(query) = next_or_stop(&s, queryable.recv_async()).await else {
+                    break;
                 };
                 let Some(robot) = k.robot_of_plan(query.key_expr().as_str()) else {
                     continue;
