@@ -6,6 +6,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::attribute::AttributeDoc;
+use crate::correction::{CorrectionDoc, CorrectionReason};
 use crate::plan::PlanMetricsDoc;
 
 /// Error body of every non-2xx answer: `{"error": {"code", "message"}}`.
@@ -205,6 +206,10 @@ pub struct PlanStatusResponse {
     /// Fraction of the path's length the robot has driven, 0–1 (once assigned).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub driven_fraction: Option<f64>,
+    /// Stretches of the path that corrections had to leave out (blocked), each `[[x, y], …]`, metres, map
+    /// frame: their cells are missed until a later revisit.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub missed: Vec<Vec<[f64; 2]>>,
     /// When the request was accepted, milliseconds since the Unix epoch.
     pub created_ms: u64,
     /// Last status change, milliseconds since the Unix epoch.
@@ -256,6 +261,25 @@ pub struct RobotView {
     /// Metres of that plan driven.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub driven_m: Option<f64>,
+    /// The last correction sent to it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub last_correction: Option<LastCorrection>,
+}
+
+/// The last correction a robot received (`GET /v1/robots/{id}`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct LastCorrection {
+    /// Plan id.
+    pub plan_id: String,
+    /// Plan version it produced.
+    pub version: u64,
+    /// Why.
+    pub reason: CorrectionReason,
+    /// When it was sent, milliseconds since the Unix epoch.
+    pub at_ms: u64,
+    /// Trigger to ready, microseconds.
+    pub compute_us: u64,
 }
 
 /// One point of `GET /v1/plans/{id}/speed-profile`.
@@ -334,6 +358,8 @@ pub enum PlanEvent {
         /// The region.
         region: RegionReady,
     },
+    /// A correction replaced a stretch of the plan (the robot got it on its corrections key).
+    Correction(CorrectionDoc),
 }
 
 impl PlanEvent {
@@ -342,6 +368,7 @@ impl PlanEvent {
         match self {
             Self::Status(s) => &s.plan_id,
             Self::Progress { plan_id, .. } | Self::RegionReady { plan_id, .. } => plan_id,
+            Self::Correction(c) => &c.plan_id,
         }
     }
 
@@ -351,6 +378,7 @@ impl PlanEvent {
             Self::Status(_) => "status",
             Self::Progress { .. } => "progress",
             Self::RegionReady { .. } => "region-ready",
+            Self::Correction(_) => "correction",
         }
     }
 }

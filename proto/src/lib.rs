@@ -6,6 +6,7 @@
 
 pub mod api;
 pub mod attribute;
+pub mod correction;
 pub mod error;
 pub mod keys;
 pub mod plan;
@@ -14,9 +15,10 @@ pub mod scene;
 
 pub use api::{
     AssignRequest, ErrorBody, ErrorDetail, PlanAccepted, PlanEvent, PlanOptions, PlanRequest, PlanStatus,
-    PlanStatusResponse, PoseView, RegionReady, RobotSpec, RobotView, SiteSummary, SpeedProfileResponse, SpeedSample,
+    PlanStatusResponse, PoseView, LastCorrection, RegionReady, RobotSpec, RobotView, SiteSummary, SpeedProfileResponse, SpeedSample,
 };
 pub use attribute::{AttributeBlobDoc, AttributeDoc};
+pub use correction::{CorrectionDoc, CorrectionError, CorrectionReason};
 pub use error::CodecError;
 pub use plan::{PlanDocument, PlanMetricsDoc, RegionDoc, WaypointDoc, WaypointKindDoc};
 pub use scene::SceneFile;

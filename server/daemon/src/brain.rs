@@ -10,9 +10,11 @@ use shift_proto::{PlanEvent, SiteSummary};
 use tokio::sync::{broadcast, mpsc, oneshot, watch};
 
 use crate::fleet::PlanPublisher;
+use crate::fleet::live::LiveMaps;
 use crate::jobs::JobRunner;
 use crate::store::Store;
 use crate::views::Views;
+use crate::watch::CheckRunner;
 
 /// Capacity of the engine's inbox; handlers wait for room (back-pressure), progress reports are dropped.
 pub const INBOX: usize = 1024;
@@ -127,10 +129,12 @@ pub fn spawn(
     views: Arc<Views>,
     events: broadcast::Sender<PlanEvent>,
     publisher: Option<PlanPublisher>,
+    live: Arc<LiveMaps>,
     runtime: tokio::runtime::Handle,
 ) -> std::io::Result<(BrainHandle, std::thread::JoinHandle<()>)> {
     let (tx, rx) = mpsc::channel(INBOX);
     let (running_tx, running_rx) = watch::channel(0);
+    let checks = CheckRunner::new(runtime.clone(), tx.clone(), live);
     let jobs = JobRunner::new(runtime, tx.clone());
     let brain = Brain {
         engine,
@@ -138,6 +142,7 @@ pub fn spawn(
         views,
         events,
         jobs,
+        checks,
         publisher,
         running: running_tx,
     };
@@ -159,6 +164,7 @@ struct Brain {
     views: Arc<Views>,
     events: broadcast::Sender<PlanEvent>,
     jobs: JobRunner,
+    checks: CheckRunner,
     publisher: Option<PlanPublisher>,
     running: watch::Sender<usize>,
 }
@@ -226,6 +232,21 @@ impl Brain {
                     None => tracing::warn!(robot, "zenoh is disabled: the plan is only served over HTTP"),
                 },
                 Command::RobotChanged(view) => self.views.set_robot(view),
+                Command::StartCheck(job) => self.checks.start(*job),
+                Command::StoreCorrection {
+                    record,
+                    correction,
+                    doc,
+                } => {
+                    self.store.put_correction(&record, &correction).map_err(store_err)?;
+                    self.views.set_doc(&record.plan_id, doc);
+                    self.views.set_record(record.clone());
+                    reply.plans.push(record);
+                }
+                Command::PublishCorrection(correction) => match &self.publisher {
+                    Some(p) => p.publish_correction(correction),
+                    None => tracing::debug!("zenoh is disabled: the correction is only served over HTTP"),
+                },
                 Command::Publish(event) => {
                     // No subscriber is not an error.
                     let _ = self.events.send(event);

@@ -21,6 +21,8 @@ pub struct Config {
     pub demo: DemoConfig,
     /// The fleet over Zenoh.
     pub zenoh: crate::fleet::config::ZenohConfig,
+    /// Watching assigned plans and correcting them around new obstacles (IKD-SWOpt).
+    pub watch: shift_engine::WatchParams,
 }
 
 /// `[http]`.

@@ -16,6 +16,7 @@ pub mod scene_io;
 pub mod server;
 pub mod store;
 pub mod views;
+pub mod watch;
 
 pub use config::Config;
 pub use server::run;

@@ -61,6 +61,7 @@ pub async fn run(
     let engine = Engine::new(EngineConfig {
         workers: config.jobs.effective_workers(),
         queue_capacity: config.jobs.queue_capacity,
+        watch: config.watch,
     });
     let zenoh = if config.zenoh.enabled {
         Some(fleet::open(&config.zenoh).await?)
@@ -68,17 +69,18 @@ pub async fn run(
         None
     };
     let publisher = zenoh.as_ref().map(|(s, k)| fleet::publisher(s, k));
+    let live = Arc::new(LiveMaps::default());
     let (brain, engine_thread) = brain::spawn(
         engine,
         store.clone(),
         views.clone(),
         events.clone(),
         publisher,
+        live.clone(),
         tokio::runtime::Handle::current(),
     )
     .context("starting the engine thread")?;
     restore(&config, &store, &views, &brain).await?;
-    let live = Arc::new(LiveMaps::default());
     let fleet = match zenoh {
         Some((session, keys)) => Some(
             Fleet::start(&config.zenoh, session, keys, brain.clone(), views.clone(), live.clone())
@@ -153,9 +155,9 @@ async fn restore(config: &Config, store: &Arc<Store>, views: &Arc<Views>, brain:
         .collect();
     tracing::info!(sites = sites.len(), plans = plans.len(), "restoring from the store");
     brain.call(Event::Restore { sites, plans }).await?;
-    // Computed plans are served again from their stored documents.
+    // Computed plans are served again from their stored documents, corrections applied.
     for id in finished {
-        if let Some(doc) = store.result(&id)? {
+        if let Some(doc) = store.current(&id)? {
             views.set_doc(&id, Arc::new(doc));
         }
     }

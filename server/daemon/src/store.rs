@@ -1,5 +1,6 @@
 //! The durable store: one redb database in the data dir holding sites (maps as uploaded), plan records, plan
-//! documents and the history of status transitions. Every write is its own committed transaction, so what
+//! documents as computed (version 1), the corrections made to them since, and the history of status
+//! transitions. The current version of a plan is its document with its corrections applied in order. Every write is its own committed transaction, so what
 //! the API acknowledged survives a kill -9. Only the engine thread writes; reads at start-up and for results.
 
 use std::path::Path;
@@ -8,13 +9,15 @@ use anyhow::{Context, Result};
 use redb::{Database, ReadableDatabase, ReadableTable, TableDefinition};
 use serde::{Serialize, de::DeserializeOwned};
 use shift_engine::{PlanRecord, SiteRecord};
-use shift_proto::PlanDocument;
+use shift_proto::{CorrectionDoc, PlanDocument};
 
 const SITES: TableDefinition<'_, &str, &[u8]> = TableDefinition::new("sites");
 const PLANS: TableDefinition<'_, &str, &[u8]> = TableDefinition::new("plans");
 const RESULTS: TableDefinition<'_, &str, &[u8]> = TableDefinition::new("results");
 /// (plan id, transition number) → `{"status", "at_ms", "error"}`.
 const TRANSITIONS: TableDefinition<'_, (&str, u32), &[u8]> = TableDefinition::new("transitions");
+/// (plan id, version produced) → correction JSON.
+const CORRECTIONS: TableDefinition<'_, (&str, u64), &[u8]> = TableDefinition::new("corrections");
 
 /// The database handle.
 #[derive(Debug)]
@@ -45,6 +48,7 @@ impl Store {
         txn.open_table(PLANS)?;
         txn.open_table(RESULTS)?;
         txn.open_table(TRANSITIONS)?;
+        txn.open_table(CORRECTIONS)?;
         txn.commit()?;
         Ok(Self { db })
     }
@@ -60,33 +64,51 @@ impl Store {
 
     /// Persists a plan record and appends its status to the plan's history when it changed.
     pub fn put_plan(&self, rec: &PlanRecord) -> Result<()> {
-        let bytes = serde_json::to_vec(rec)?;
         let txn = self.db.begin_write()?;
-        {
-            let mut plans = txn.open_table(PLANS)?;
-            let previous = plans
-                .get(rec.plan_id.as_str())?
-                .map(|g| decode::<PlanRecord>("plan", &rec.plan_id, g.value()))
-                .transpose()?;
-            plans.insert(rec.plan_id.as_str(), bytes.as_slice())?;
-            let mut history = txn.open_table(TRANSITIONS)?;
-            let last = history
-                .range((rec.plan_id.as_str(), 0)..=(rec.plan_id.as_str(), u32::MAX))?
-                .next_back()
-                .transpose()?
-                .map(|(k, _)| k.value().1);
-            if previous.as_ref().is_none_or(|p| p.status != rec.status) {
-                let t = Transition {
-                    status: rec.status,
-                    at_ms: rec.updated_ms,
-                    error: rec.error.clone(),
-                };
-                let n = last.map_or(0, |n| n + 1);
-                history.insert((rec.plan_id.as_str(), n), serde_json::to_vec(&t)?.as_slice())?;
-            }
-        }
+        write_plan(&txn, rec)?;
         txn.commit()?;
         Ok(())
+    }
+
+    /// Persists a correction and the plan record at its version in one transaction.
+    pub fn put_correction(&self, rec: &PlanRecord, correction: &CorrectionDoc) -> Result<()> {
+        let bytes = serde_json::to_vec(correction)?;
+        let txn = self.db.begin_write()?;
+        txn.open_table(CORRECTIONS)?
+            .insert((correction.plan_id.as_str(), correction.version), bytes.as_slice())?;
+        write_plan(&txn, rec)?;
+        txn.commit()?;
+        Ok(())
+    }
+
+    /// A plan's corrections in version order.
+    pub fn corrections(&self, plan_id: &str) -> Result<Vec<CorrectionDoc>> {
+        let txn = self.db.begin_read()?;
+        let t = txn.open_table(CORRECTIONS)?;
+        let mut out = Vec::new();
+        for item in t.range((plan_id, 0)..=(plan_id, u64::MAX))? {
+            let (_, v) = item?;
+            out.push(decode("correction", plan_id, v.value())?);
+        }
+        Ok(out)
+    }
+
+    /// A plan's current document: as computed, with its corrections applied in order. A correction that does
+    /// not apply (a damaged store) ends the chain there, with an error in the log.
+    pub fn current(&self, plan_id: &str) -> Result<Option<PlanDocument>> {
+        let Some(mut doc) = self.result(plan_id)? else {
+            return Ok(None);
+        };
+        for c in self.corrections(plan_id)? {
+            match c.apply(&doc) {
+                Ok(next) => doc = next,
+                Err(e) => {
+                    tracing::error!(plan_id, version = c.version, "stored correction does not apply: {e}");
+                    break;
+                }
+            }
+        }
+        Ok(Some(doc))
     }
 
     /// Persists a plan document.
@@ -140,6 +162,35 @@ impl Store {
         }
         Ok(out)
     }
+}
+
+/// Writes a plan record and appends its status to the history when it changed, inside `txn`.
+fn write_plan(txn: &redb::WriteTransaction, rec: &PlanRecord) -> Result<()> {
+    let bytes = serde_json::to_vec(rec)?;
+    {
+            let mut plans = txn.open_table(PLANS)?;
+        let previous = plans
+            .get(rec.plan_id.as_str())?
+            .map(|g| decode::<PlanRecord>("plan", &rec.plan_id, g.value()))
+            .transpose()?;
+        plans.insert(rec.plan_id.as_str(), bytes.as_slice())?;
+        let mut history = txn.open_table(TRANSITIONS)?;
+        let last = history
+            .range((rec.plan_id.as_str(), 0)..=(rec.plan_id.as_str(), u32::MAX))?
+            .next_back()
+            .transpose()?
+            .map(|(k, _)| k.value().1);
+        if previous.as_ref().is_none_or(|p| p.status != rec.status) {
+            let t = Transition {
+                status: rec.status,
+                at_ms: rec.updated_ms,
+                error: rec.error.clone(),
+            };
+            let n = last.map_or(0, |n| n + 1);
+            history.insert((rec.plan_id.as_str(), n), serde_json::to_vec(&t)?.as_slice())?;
+        }
+        }
+    Ok(())
 }
 
 #[cfg(test)]

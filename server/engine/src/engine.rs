@@ -3,7 +3,10 @@
 use std::collections::{BTreeMap, HashMap, HashSet, VecDeque};
 use std::sync::Arc;
 
-use shift_proto::{PlanDocument, PlanEvent, PlanRequest, PlanStatus, PoseView, RegionReady, RobotView, SiteSummary};
+use shift_proto::{
+    CorrectionDoc, LastCorrection, PlanDocument, PlanEvent, PlanRequest, PlanStatus, PoseView, RegionReady, RobotView,
+    SiteSummary,
+};
 
 use crate::error::{EngineError, Result};
 use crate::job::PlanJob;
@@ -11,14 +14,17 @@ use crate::plan::PlanRecord;
 use crate::request::validate;
 use crate::robots::{Assignment, Pose2, Robot, Robots};
 use crate::site::{Site, SiteMap, SiteRecord, validate_name, validate_site_name};
+use crate::watch::{CheckJob, CheckOutcome, PatchLimits, Trigger, WatchParams};
 
-/// Sizes of the job machinery.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// Sizes of the job machinery and how paths are watched.
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EngineConfig {
     /// Jobs computed at once (the blocking pool's size).
     pub workers: usize,
     /// Jobs allowed to wait for a worker; one more is refused with [`EngineError::QueueFull`].
     pub queue_capacity: usize,
+    /// Path watching and corrections.
+    pub watch: WatchParams,
 }
 
 impl Default for EngineConfig {
@@ -26,6 +32,7 @@ impl Default for EngineConfig {
         Self {
             workers: 2,
             queue_capacity: 64,
+            watch: WatchParams::default(),
         }
     }
 }
@@ -111,6 +118,28 @@ pub enum Event {
         /// The plan's current document.
         doc: Arc<PlanDocument>,
     },
+    /// New obstacle points landed in a site's live map inside the box `[min, max]` (map frame, metres).
+    MapChanged {
+        /// Site.
+        site: String,
+        /// Lower corner (x, y).
+        min: [f64; 2],
+        /// Upper corner (x, y).
+        max: [f64; 2],
+    },
+    /// A path check ended.
+    CheckFinished {
+        /// Robot checked.
+        robot: String,
+        /// Plan it drove when the check started.
+        plan_id: String,
+        /// Version checked.
+        base_version: u64,
+        /// What the check found.
+        outcome: CheckOutcome,
+        /// Time the check took, microseconds (measured by the daemon).
+        compute_us: u64,
+    },
     /// The daemon is stopping: start no more jobs, refuse new plans.
     Shutdown,
 }
@@ -151,6 +180,21 @@ pub enum Command {
     },
     /// The read model's robot view changed.
     RobotChanged(RobotView),
+    /// Check this robot's path (off the engine thread, with the site's live map); answer with
+    /// [`Event::CheckFinished`].
+    StartCheck(Box<CheckJob>),
+    /// Persist a correction together with the plan record it bumps (one transaction), then show `doc` (the
+    /// corrected current version) in the read model.
+    StoreCorrection {
+        /// The plan's record at the new version.
+        record: PlanRecord,
+        /// The correction.
+        correction: Arc<CorrectionDoc>,
+        /// The current document after it.
+        doc: Arc<PlanDocument>,
+    },
+    /// Send a correction to its robot (its corrections key; the plan queryable serves the new version).
+    PublishCorrection(Arc<CorrectionDoc>),
 }
 
 /// Odometry within this distance of a waypoint counts as reaching it, metres.
@@ -172,6 +216,7 @@ fn robot_view(r: &Robot) -> RobotView {
         plan_id: r.assignment.as_ref().map(|a| a.plan_id.clone()),
         driven_fraction: r.assignment.as_ref().map(Assignment::fraction),
         driven_m: r.assignment.as_ref().map(Assignment::driven_m),
+        last_correction: r.last_correction.clone(),
     }
 }
 
@@ -195,6 +240,7 @@ impl Engine {
             config: EngineConfig {
                 workers: config.workers.max(1),
                 queue_capacity: config.queue_capacity,
+                watch: config.watch,
             },
             next_seq: 1,
             ..Self::default()
@@ -239,6 +285,14 @@ impl Engine {
             }
             Event::RobotPose { robot, pose } => self.pose(&robot, pose, now_ms, &mut out),
             Event::AssignPlan { plan_id, robot, doc } => self.assign(&plan_id, &robot, doc, now_ms, &mut out)?,
+            Event::MapChanged { site, min, max } => self.map_changed(&site, min, max, now_ms, &mut out),
+            Event::CheckFinished {
+                robot,
+                plan_id,
+                base_version,
+                outcome,
+                compute_us,
+            } => self.check_finished(&robot, &plan_id, base_version, outcome, compute_us, now_ms, &mut out),
             Event::Shutdown => self.draining = true,
         }
         self.pump(now_ms, &mut out);
@@ -307,6 +361,7 @@ impl Engine {
             warnings: Vec::new(),
             robot: None,
             driven_fraction: 0.0,
+            missed: Vec::new(),
             attempts: 0,
             created_ms: now_ms,
             updated_ms: now_ms,
@@ -371,6 +426,7 @@ impl Engine {
             doc,
         });
         out.push(Command::RobotChanged(robot_view(r)));
+        self.check(robot, Trigger::MapChange, now_ms, out);
         Ok(())
     }
 
@@ -396,6 +452,148 @@ impl Engine {
             }
         }
         out.push(Command::RobotChanged(robot_view(r)));
+        let due = r.watch.last_check_ms + self.config.watch.check_interval_ms <= now_ms;
+        if due {
+            self.check(robot, Trigger::Pose, now_ms, out);
+        }
+    }
+
+    /// Robots of `site` whose detection window reaches the changed box get checked now.
+    fn map_changed(&mut self, site: &str, min: [f64; 2], max: [f64; 2], now_ms: u64, out: &mut Vec<Command>) {
+        let reach = self.config.watch.window_radius_m;
+        let near: Vec<String> = self
+            .robots
+            .iter()
+            .filter(|r| {
+                let Some(a) = &r.assignment else { return false };
+                let on_site = self.plans.get(&a.plan_id).is_some_and(|p| p.request.site == site);
+                let Some(p) = r.pose else { return on_site };
+                let dx = (min[0] - p.x).max(p.x - max[0]).max(0.0);
+                let dy = (min[1] - p.y).max(p.y - max[1]).max(0.0);
+                on_site && dx.hypot(dy) <= reach
+            })
+            .map(|r| r.id.clone())
+            .collect();
+        for robot in near {
+            self.check(&robot, Trigger::MapChange, now_ms, out);
+        }
+    }
+
+    /// Starts a check of `robot`'s path unless one is running (then it runs again when that one ends).
+    fn check(&mut self, robot: &str, trigger: Trigger, now_ms: u64, out: &mut Vec<Command>) {
+        if !self.config.watch.enabled {
+            return;
+        }
+        let Some(r) = self.robots.get_mut(robot) else { return };
+        let (Some(a), Some(pose)) = (&r.assignment, r.pose) else { return };
+        if r.watch.in_flight {
+            r.watch.pending = true;
+            return;
+        }
+        let Some(rec) = self.plans.get(&a.plan_id) else { return };
+        if rec.status != PlanStatus::Active {
+            return;
+        }
+        let Some(site) = self.sites.get(&rec.request.site) else { return };
+        let spec = rec.request.robot;
+        r.watch.in_flight = true;
+        r.watch.pending = false;
+        r.watch.last_check_ms = now_ms;
+        out.push(Command::StartCheck(Box::new(CheckJob {
+            robot: robot.to_owned(),
+            plan_id: a.plan_id.clone(),
+            site: rec.request.site.clone(),
+            doc: a.doc.clone(),
+            ahead_from: a.index,
+            pose,
+            map: site.map.clone(),
+            params: self.config.watch.correct_params(spec.radius),
+            limits: PatchLimits {
+                v_min_mps: spec.v_min,
+                v_max_mps: spec.v_max,
+                a_max_mps2: spec.a_max,
+            },
+            trigger,
+        })));
+    }
+
+    /// A check ended: a proposal for the version still driven becomes the next version; anything else is
+    /// dropped, and a robot whose world changed meanwhile is checked again.
+    #[allow(clippy::too_many_arguments)]
+    fn check_finished(
+        &mut self,
+        robot: &str,
+        plan_id: &str,
+        base_version: u64,
+        outcome: CheckOutcome,
+        compute_us: u64,
+        now_ms: u64,
+        out: &mut Vec<Command>,
+    ) {
+        let Some(r) = self.robots.get_mut(robot) else { return };
+        r.watch.in_flight = false;
+        let mut again = std::mem::take(&mut r.watch.pending);
+        let current = r
+            .assignment
+            .as_ref()
+            .is_some_and(|a| a.plan_id == plan_id && a.doc.version == base_version);
+        match outcome {
+            CheckOutcome::Correct(p) if current => {
+                let Some(a) = r.assignment.as_mut() else { return };
+                let Some(rec) = self.plans.get_mut(plan_id) else { return };
+                let correction = CorrectionDoc {
+                    plan_id: plan_id.to_owned(),
+                    robot: robot.to_owned(),
+                    base_version,
+                    version: base_version + 1,
+                    from: p.from,
+                    to: p.to,
+                    waypoints: p.waypoints,
+                    reason: p.reason,
+                    dt_after_s: p.dt_after_s,
+                    skipped: p.skipped,
+                    compute_us,
+                };
+                let doc = match correction.apply(&a.doc) {
+                    Ok(d) => Arc::new(d),
+                    Err(e) => {
+                        // A check proposes against the document it was given; this is a bug, not input.
+                        debug_assert!(false, "proposed correction does not apply: {e}");
+                        return;
+                    }
+                };
+                a.corrected(doc.clone(), correction.from, correction.to, correction.waypoints.len());
+                rec.version = correction.version;
+                rec.updated_ms = now_ms;
+                if !correction.skipped.is_empty() {
+                    rec.missed.push(correction.skipped.clone());
+                }
+                r.last_correction = Some(LastCorrection {
+                    plan_id: plan_id.to_owned(),
+                    version: correction.version,
+                    reason: correction.reason,
+                    at_ms: now_ms,
+                    compute_us,
+                });
+                let correction = Arc::new(correction);
+                out.push(Command::StoreCorrection {
+                    record: rec.clone(),
+                    correction: correction.clone(),
+                    doc,
+                });
+                out.push(Command::PublishCorrection(correction.clone()));
+                out.push(Command::Publish(PlanEvent::Correction((*correction).clone())));
+                out.push(Command::RobotChanged(robot_view(r)));
+                // The window may hold another breach: look again at once.
+                again = true;
+            }
+            // Stale (the plan moved on meanwhile): the new version needs its own look.
+            CheckOutcome::Correct(_) => again = true,
+            CheckOutcome::Clear | CheckOutcome::Failed(_) => {}
+        }
+        if again {
+            self.check(robot, Trigger::MapChange, now_ms, out);
+        }
     }
 
     fn cancel(&mut self, plan_id: &str, now_ms: u64, out: &mut Vec<Command>) -> Result<()> {
@@ -544,3 +742,5 @@ impl Engine {
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod watch_tests;

@@ -14,6 +14,7 @@ pub mod plan;
 pub mod request;
 pub mod robots;
 pub mod site;
+pub mod watch;
 
 pub use engine::{Command, Engine, EngineConfig, Event, JobOutcome};
 pub use error::EngineError;
@@ -22,3 +23,4 @@ pub use live_map::{LiveMap, LiveMapParams, LiveMapStats};
 pub use plan::PlanRecord;
 pub use robots::Pose2;
 pub use site::{MapSource, SiteMap, SiteRecord};
+pub use watch::{CheckJob, CheckOutcome, ProposedCorrection, WatchParams, run_check};

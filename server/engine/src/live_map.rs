@@ -34,7 +34,7 @@ impl Default for LiveMapParams {
 }
 
 /// What one cloud did to the map.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct IngestReport {
     /// Points offered.
     pub offered: usize,
@@ -44,6 +44,8 @@ pub struct IngestReport {
     pub inserted: usize,
     /// Points refused because the tree is at its cap.
     pub over_cap: usize,
+    /// Ground-plane box `[min, max]` (metres) of the points kept, when any were.
+    pub extent: Option<([f64; 2], [f64; 2])>,
 }
 
 /// Running totals.
@@ -128,6 +130,10 @@ impl LiveMap {
         for q in &keep {
             let k = self.key(q);
             self.seen.insert(k, now_ms);
+            let (x, y) = (f64::from(q.x), f64::from(q.y));
+            let e = report.extent.get_or_insert(([x, y], [x, y]));
+            e.0 = [e.0[0].min(x), e.0[1].min(y)];
+            e.1 = [e.1[0].max(x), e.1[1].max(y)];
         }
         report.inserted = self.tree.add_points(&keep, true);
         self.stats.clouds += 1;
@@ -203,6 +209,8 @@ mod tests {
         ];
         let r = m.ingest(&pts, false, 10);
         assert_eq!(r.filtered, 4);
+        let e = r.extent.expect("two points kept");
+        assert!((e.0[0] - 1.02).abs() < 1e-6 && (e.1[1] - 1.03).abs() < 1e-6, "{e:?}");
         assert_eq!(m.tree().len(), 1);
         // A 2-D scan ignores the band.
         m.ingest(&[[2.0, 2.0, 0.0]], true, 11);

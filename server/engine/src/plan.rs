@@ -32,6 +32,9 @@ pub struct PlanRecord {
     /// Fraction of its length that robot has driven, 0–1.
     #[serde(default)]
     pub driven_fraction: f64,
+    /// Stretches corrections left out (blocked), each `[[x, y], …]`, metres, map frame.
+    #[serde(default)]
+    pub missed: Vec<Vec<[f64; 2]>>,
     /// How many times a worker started it.
     pub attempts: u32,
     /// Accepted at, milliseconds since the Unix epoch.
@@ -55,6 +58,7 @@ impl PlanRecord {
             warnings: self.warnings.clone(),
             robot: self.robot.clone(),
             driven_fraction: self.robot.as_ref().map(|_| self.driven_fraction),
+            missed: self.missed.clone(),
             created_ms: self.created_ms,
             updated_ms: self.updated_ms,
         }

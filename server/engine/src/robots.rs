@@ -64,6 +64,22 @@ impl Assignment {
         if total > 0.0 { self.driven_m() / total } else { 1.0 }
     }
 
+    /// Drives the corrected document from now on: the arc lengths are recomputed and the reached index is
+    /// moved past the patch (`waypoints[from..to)` replaced by `inserted` waypoints). A robot inside the
+    /// replaced stretch continues from the waypoint before it.
+    pub fn corrected(&mut self, doc: Arc<PlanDocument>, from: usize, to: usize, inserted: usize) {
+        let index = if self.index >= to {
+            self.index - (to - from) + inserted
+        } else if self.index >= from {
+            from.saturating_sub(1)
+        } else {
+            self.index
+        };
+        let plan_id = std::mem::take(&mut self.plan_id);
+        *self = Self::new(plan_id, doc);
+        self.index = index.min(self.doc.waypoints.len().saturating_sub(1));
+    }
+
     /// True once the last waypoint is reached.
     pub fn finished(&self) -> bool {
         self.index + 1 >= self.doc.waypoints.len()
@@ -104,6 +120,21 @@ pub struct Robot {
     pub last_seen_ms: u64,
     /// The plan it drives.
     pub assignment: Option<Assignment>,
+    /// Path watching (Circular Judgment) bookkeeping.
+    pub watch: WatchState,
+    /// The last correction sent to it.
+    pub last_correction: Option<shift_proto::LastCorrection>,
+}
+
+/// When a robot's path was last checked and whether a check is running.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct WatchState {
+    /// A check job is running.
+    pub in_flight: bool,
+    /// Something changed while it ran: check again when it ends.
+    pub pending: bool,
+    /// Last check started, milliseconds since the Unix epoch (0 = never).
+    pub last_check_ms: u64,
 }
 
 /// Every robot seen, by id.
@@ -121,6 +152,8 @@ impl Robots {
             pose: None,
             last_seen_ms: now_ms,
             assignment: None,
+            watch: WatchState::default(),
+            last_correction: None,
         })
     }
 
@@ -132,6 +165,16 @@ impl Robots {
     /// Every robot.
     pub fn iter(&self) -> impl Iterator<Item = &Robot> {
         self.robots.values()
+    }
+
+    /// Every robot, mutably.
+    pub fn iter_mut(&mut self) -> impl Iterator<Item = &mut Robot> {
+        self.robots.values_mut()
+    }
+
+    /// A robot, mutably.
+    pub fn get_mut(&mut self, id: &str) -> Option<&mut Robot> {
+        self.robots.get_mut(id)
     }
 }
 
@@ -186,5 +229,26 @@ mod tests {
         a.advance(0.0, 0.0, 0.3, 2);
         assert!(a.finished());
         assert!((a.driven_m() - 6.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_correction_moves_the_reached_index_past_the_patch() {
+        let pts: Vec<(f64, f64)> = (0..6).map(|i| (i as f64, 0.0)).collect();
+        let mut a = Assignment::new("p-1".into(), doc(&pts));
+        a.index = 4;
+        // waypoints[1..3) (two) replaced by three.
+        let new: Vec<(f64, f64)> = vec![(0.0, 0.0), (0.5, 0.5), (1.0, 0.6), (1.5, 0.5), (3.0, 0.0), (4.0, 0.0), (5.0, 0.0)];
+        a.corrected(doc(&new), 1, 3, 3);
+        assert_eq!(a.index, 5, "still at (4, 0)");
+        assert_eq!(a.doc.waypoints[a.index].x, 4.0);
+        assert_eq!(a.plan_id, "p-1");
+        // Inside the patch: back to the waypoint before it.
+        a.index = 2;
+        a.corrected(doc(&new), 2, 4, 1);
+        assert_eq!(a.index, 1);
+        // Before it: unchanged.
+        a.index = 0;
+        a.corrected(doc(&new), 2, 4, 1);
+        assert_eq!(a.index, 0);
     }
 }

@@ -6,6 +6,7 @@
 use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
+use shift_planner::map::DistanceField;
 use shift_planner::map::grid::OccupancyGrid;
 use shift_planner::map::json_grid::JsonGrid;
 use shift_planner::map::ros::{MapYaml, grid_from_image};
@@ -37,8 +38,23 @@ pub enum MapSource {
 pub struct SiteMap {
     /// The thresholded grid, shared with running jobs.
     pub grid: Arc<OccupancyGrid>,
+    /// Distance from every cell centre to the nearest non-free cell centre (the map border counts as one),
+    /// metres: the static half of the obstacle distance path checks use (the live ikd-tree is the other).
+    pub clearance: Arc<DistanceField>,
     /// Remarks from reading it.
     pub warnings: Vec<String>,
+}
+
+impl SiteMap {
+    /// A parsed map with its clearance field (an exact distance transform: linear in the cells).
+    pub fn new(grid: OccupancyGrid, warnings: Vec<String>) -> Self {
+        let clearance = DistanceField::compute(grid.geometry, |i| !grid.is_free(i), true);
+        Self {
+            grid: Arc::new(grid),
+            clearance: Arc::new(clearance),
+            warnings,
+        }
+    }
 }
 
 impl MapSource {
@@ -49,17 +65,11 @@ impl MapSource {
             Self::Ros { yaml, image } => {
                 let y = MapYaml::parse(yaml)?;
                 let loaded = grid_from_image(&y, image)?;
-                Ok(SiteMap {
-                    grid: Arc::new(loaded.grid),
-                    warnings: loaded.warnings,
-                })
+                Ok(SiteMap::new(loaded.grid, loaded.warnings))
             }
             Self::Json { text } => {
                 let grid = JsonGrid::parse(text)?.into_grid()?;
-                Ok(SiteMap {
-                    grid: Arc::new(grid),
-                    warnings: Vec::new(),
-                })
+                Ok(SiteMap::new(grid, Vec::new()))
             }
         }
     }

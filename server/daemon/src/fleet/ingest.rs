@@ -11,8 +11,10 @@ use std::time::Instant;
 use shift_engine::LiveMapParams;
 use shift_proto::ros::point_cloud2::{cloud_xyz, decode_point_cloud2};
 
+use shift_engine::Event;
+
 use super::live::LiveMaps;
-use crate::brain::now_ms;
+use crate::brain::{BrainHandle, Msg, now_ms};
 use crate::views::Views;
 
 /// How often the live map's horizon is enforced, milliseconds.
@@ -47,6 +49,8 @@ pub struct Ingest {
     params: LiveMapParams,
     views: Arc<Views>,
     live: Arc<LiveMaps>,
+    /// Told where new obstacle points landed (path watching).
+    brain: Option<BrainHandle>,
 }
 
 impl Ingest {
@@ -58,6 +62,7 @@ impl Ingest {
         params: LiveMapParams,
         views: Arc<Views>,
         live: Arc<LiveMaps>,
+        brain: Option<BrainHandle>,
     ) -> Self {
         Self {
             queues: Mutex::new(Queues::default()),
@@ -68,6 +73,7 @@ impl Ingest {
             params,
             views,
             live,
+            brain,
         }
     }
 
@@ -179,6 +185,17 @@ impl Ingest {
             Err(_) => return Err("live map lock poisoned".into()),
         };
         live.mark_update(now);
+        if let (Some(brain), Some((min, max)), true) = (&self.brain, report.extent, report.inserted > 0) {
+            // Lossy: a dropped notice is caught by the next pose-triggered check.
+            let changed = Event::MapChanged {
+                site: self.site.clone(),
+                min,
+                max,
+            };
+            if brain.try_tell(Msg::event(changed)).is_err() {
+                metrics::counter!("shift_map_change_dropped_total").increment(1);
+            }
+        }
         tracing::debug!(
             robot = cloud.robot,
             offered = report.offered,

@@ -11,7 +11,7 @@ use std::time::Instant;
 
 use anyhow::{Result, anyhow};
 use shift_engine::{Event, LiveMapParams, Pose2};
-use shift_proto::PlanDocument;
+use shift_proto::{CorrectionDoc, PlanDocument};
 use shift_proto::keys::{KeySpace, Stream};
 use shift_proto::ros::odometry::decode_odom_payload;
 use shift_proto::ros::path::encode_path;
@@ -88,6 +88,27 @@ impl PlanPublisher {
     }
 }
 
+impl PlanPublisher {
+    /// Sends a correction to its robot's corrections key (JSON). A robot that misses it sees a version gap
+    /// at the next one and fetches the current plan from the queryable.
+    pub fn publish_correction(&self, correction: Arc<CorrectionDoc>) {
+        let Ok(key) = self.keys.corrections(&correction.robot) else {
+            tracing::warn!(robot = correction.robot, "no valid corrections key for this robot name");
+            return;
+        };
+        let session = self.session.clone();
+        self.runtime.spawn(async move {
+            let json = match serde_json::to_vec(&*correction) {
+                Ok(j) => j,
+                Err(e) => return tracing::error!("correction JSON: {e}"),
+            };
+            if let Err(e) = session.put(&key, json).encoding(Encoding::APPLICATION_JSON).await {
+                tracing::warn!(robot = correction.robot, "publishing a correction: {e}");
+            }
+        });
+    }
+}
+
 /// The next item of a zenoh receiver, or `None` once `stop` is cancelled or the receiver closed.
 async fn next_or_stop<T, E>(
     stop: &CancellationToken,
@@ -150,6 +171,7 @@ impl Fleet {
             params,
             views.clone(),
             live,
+            Some(brain.clone()),
         ));
         let worker = ingest.clone();
         let ingest_thread = std::thread::Builder::new()

@@ -4,7 +4,7 @@ use super::*;
 use crate::robots::Pose2;
 use crate::site::MapSource;
 
-fn site_event(name: &str) -> Event {
+pub(super) fn site_event(name: &str) -> Event {
     let source = MapSource::Json {
         text: r#"{"resolution": 0.1, "origin": [0, 0], "width": 30, "height": 20, "cells": []}"#
             .replace("[]", &format!("[{}]", vec!["0"; 600].join(","))),
@@ -20,7 +20,7 @@ fn site_event(name: &str) -> Event {
     }
 }
 
-fn request(site: &str) -> PlanRequest {
+pub(super) fn request(site: &str) -> PlanRequest {
     PlanRequest {
         site: site.into(),
         start: [0.5, 0.5],
@@ -37,10 +37,11 @@ fn request(site: &str) -> PlanRequest {
     }
 }
 
-fn engine(workers: usize, queue_capacity: usize) -> Engine {
+pub(super) fn engine(workers: usize, queue_capacity: usize) -> Engine {
     let mut e = Engine::new(EngineConfig {
         workers,
         queue_capacity,
+        ..EngineConfig::default()
     });
     e.handle(site_event("s"), 0).expect("site");
     e
@@ -261,6 +262,7 @@ fn shutdown_interrupts_back_to_queued_and_restore_requeues() {
     let mut e2 = Engine::new(EngineConfig {
         workers: 1,
         queue_capacity: 4,
+        ..EngineConfig::default()
     });
     let c = e2
         .handle(

@@ -1,0 +1,81 @@
+//! Path checks on the blocking pool: the engine asks for a check of one robot's path
+//! ([`shift_engine::CheckJob`]); this runs the engine's pure check function with the site's live obstacle
+//! tree under its read lock (the ingest thread, the only writer, waits at most one check), times it, and
+//! reports back. The engine keeps at most one check per robot in flight, so this never queues work itself.
+
+use std::panic::AssertUnwindSafe;
+use std::sync::Arc;
+use std::time::Instant;
+
+use shift_engine::{CheckJob, CheckOutcome, Event, run_check};
+use tokio::sync::mpsc;
+
+use crate::brain::Msg;
+use crate::fleet::live::LiveMaps;
+
+/// Spawns checks.
+#[derive(Debug)]
+pub struct CheckRunner {
+    runtime: tokio::runtime::Handle,
+    to_engine: mpsc::Sender<Msg>,
+    live: Arc<LiveMaps>,
+}
+
+impl CheckRunner {
+    /// A runner on `runtime`'s blocking pool reading `live` and reporting to the engine thread.
+    pub fn new(runtime: tokio::runtime::Handle, to_engine: mpsc::Sender<Msg>, live: Arc<LiveMaps>) -> Self {
+        Self {
+            runtime,
+            to_engine,
+            live,
+        }
+    }
+
+    /// Starts a check.
+    pub fn start(&self, job: CheckJob) {
+        let to_engine = self.to_engine.clone();
+        let live = self.live.clone();
+        self.runtime.spawn_blocking(move || {
+            let t = Instant::now();
+            let site = live.get(&job.site);
+            let result = std::panic::catch_unwind(AssertUnwindSafe(|| match &site {
+                Some(s) => match s.map.read() {
+                    Ok(map) => run_check(&job, Some(map.tree())),
+                    Err(_) => CheckOutcome::Failed("live map lock poisoned".into()),
+                },
+                None => run_check(&job, None),
+            }));
+            let compute_us = t.elapsed().as_micros() as u64;
+            metrics::histogram!("shift_check_seconds").record(compute_us as f64 / 1e6);
+            let outcome = result.unwrap_or_else(|_| {
+                tracing::error!(robot = job.robot, plan_id = job.plan_id, "path check panicked");
+                CheckOutcome::Failed("internal check error (logged)".into())
+            });
+            match &outcome {
+                CheckOutcome::Correct(p) => {
+                    metrics::counter!("shift_corrections_total", "reason" => p.reason.as_str()).increment(1);
+                    tracing::info!(
+                        robot = job.robot,
+                        plan_id = job.plan_id,
+                        reason = p.reason.as_str(),
+                        from = p.from,
+                        to = p.to,
+                        iterations = p.iterations,
+                        compute_us,
+                        "path correction"
+                    );
+                }
+                CheckOutcome::Failed(why) => tracing::warn!(robot = job.robot, "path check failed: {why}"),
+                CheckOutcome::Clear => {}
+            }
+            // The engine must learn of every end (it keeps one check per robot in flight).
+            let _ = to_engine.blocking_send(Msg::event(Event::CheckFinished {
+                robot: job.robot,
+                plan_id: job.plan_id,
+                base_version: job.doc.version,
+                outcome,
+                compute_us,
+            }));
+        });
+    }
+}

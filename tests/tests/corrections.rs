@@ -1,0 +1,315 @@
+//! IKD-SWOpt end to end over Zenoh on loopback: a scripted robot drives its plan; an obstacle cluster it sees
+//! a couple of metres ahead on the path makes the daemon send a correction that keeps clear of every point,
+//! joins the old path at both ends and is what the robot's plan query and the API return as the new version.
+//! An obstacle wall that closes a corridor gives a "skipped" correction, never a colliding one.
+
+use std::time::Duration;
+
+use anyhow::{Context, Result, anyhow, bail};
+use serde_json::{Value, json};
+use shift_proto::ros::point_cloud2::encode_point_cloud2_xyz;
+use shift_proto::ros::{Header, Time};
+use shift_proto::{CorrectionDoc, CorrectionReason, PlanDocument, WaypointDoc};
+use shift_tests::{TestServer, test_config};
+use zenoh::bytes::Encoding;
+
+const LONG: Duration = Duration::from_secs(120);
+const RADIUS: f64 = 0.15;
+
+fn free_port() -> Result<u16> {
+    Ok(std::net::TcpListener::bind("127.0.0.1:0")?.local_addr()?.port())
+}
+
+async fn robot_session(endpoint: &str) -> Result<zenoh::Session> {
+    let mut c = zenoh::Config::default();
+    let set = |c: &mut zenoh::Config, k: &str, v: &str| c.insert_json5(k, v).map_err(|e| anyhow!("{k}: {e}"));
+    set(&mut c, "mode", "\"peer\"")?;
+    set(&mut c, "listen/endpoints", "[]")?;
+    set(&mut c, "connect/endpoints", &format!("[\"{endpoint}\"]"))?;
+    set(&mut c, "scouting/multicast/enabled", "false")?;
+    set(&mut c, "scouting/gossip/enabled", "false")?;
+    zenoh::open(c).await.map_err(|e| anyhow!("robot session: {e}"))
+}
+
+/// A JSON grid (DESIGN §5.3) of `w × h` cells at 0.05 m, free inside a one-cell wall ring, with `blocked`
+/// extra occupied rectangles `(x0, y0, x1, y1)` in metres.
+fn grid(w: usize, h: usize, blocked: &[(f64, f64, f64, f64)]) -> Value {
+    let res = 0.05;
+    let mut cells = vec![0i32; w * h];
+    for r in 0..h {
+        for c in 0..w {
+            let (x, y) = ((c as f64 + 0.5) * res, (r as f64 + 0.5) * res);
+            let wall = r == 0 || c == 0 || r + 1 == h || c + 1 == w;
+            let inside = blocked
+                .iter()
+                .any(|&(x0, y0, x1, y1)| x >= x0 && x <= x1 && y >= y0 && y <= y1);
+            if wall || inside {
+                cells[r * w + c] = 100;
+            }
+        }
+    }
+    json!({"resolution": res, "origin": [0.0, 0.0], "width": w, "height": h, "cells": cells})
+}
+
+struct Robot {
+    session: zenoh::Session,
+    _token: zenoh::liveliness::LivelinessToken,
+    corrections: zenoh::pubsub::Subscriber<zenoh::handlers::FifoChannelHandler<zenoh::sample::Sample>>,
+}
+
+impl Robot {
+    async fn join(endpoint: &str, name: &str) -> Result<Self> {
+        let session = robot_session(endpoint).await?;
+        let token = session
+            .liveliness()
+            .declare_token(format!("shift/default/robots/{name}/alive"))
+            .await
+            .map_err(|e| anyhow!("{e}"))?;
+        let corrections = session
+            .declare_subscriber(format!("shift/default/robots/{name}/corrections"))
+            .await
+            .map_err(|e| anyhow!("{e}"))?;
+        Ok(Self {
+            session,
+            _token: token,
+            corrections,
+        })
+    }
+
+    async fn odom(&self, name: &str, x: f64, y: f64, yaw: f64) -> Result<()> {
+        let body = json!({"x": x, "y": y, "yaw": yaw, "vx": 0.3, "vy": 0.0, "wz": 0.0, "stamp": 1.0});
+        self.session
+            .put(format!("shift/default/robots/{name}/odom"), serde_json::to_vec(&body)?)
+            .encoding(Encoding::APPLICATION_JSON)
+            .await
+            .map_err(|e| anyhow!("{e}"))
+    }
+
+    async fn cloud(&self, name: &str, pts: &[[f32; 3]]) -> Result<()> {
+        let header = Header {
+            stamp: Time { sec: 2, nanosec: 0 },
+            frame_id: "map".into(),
+        };
+        self.session
+            .put(
+                format!("shift/default/robots/{name}/cloud"),
+                encode_point_cloud2_xyz(&header, pts),
+            )
+            .encoding(Encoding::APPLICATION_CDR)
+            .await
+            .map_err(|e| anyhow!("{e}"))
+    }
+
+    async fn next_correction(&self) -> Result<CorrectionDoc> {
+        let sample = tokio::time::timeout(LONG, self.corrections.recv_async())
+            .await
+            .context("no correction arrived")?
+            .map_err(|e| anyhow!("{e}"))?;
+        Ok(serde_json::from_slice(&sample.payload().to_bytes())?)
+    }
+
+    async fn query_plan(&self, name: &str) -> Result<PlanDocument> {
+        let replies = self
+            .session
+            .get(format!("shift/default/robots/{name}/plan"))
+            .await
+            .map_err(|e| anyhow!("{e}"))?;
+        let reply = tokio::time::timeout(LONG, replies.recv_async())
+            .await?
+            .map_err(|e| anyhow!("{e}"))?;
+        let sample = reply.result().map_err(|e| anyhow!("query error {e:?}"))?;
+        Ok(serde_json::from_slice(&sample.payload().to_bytes())?)
+    }
+}
+
+/// Starts a server with Zenoh on a free loopback port, uploads `map` as site `site`, plans from `start` and
+/// assigns the plan to robot r1 (which joined first). Returns the server, the robot and the plan.
+async fn planned(site: &str, map: Value, start: [f64; 2]) -> Result<Planned> {
+    let dir = tempfile::tempdir()?;
+    let endpoint = format!("tcp/127.0.0.1:{}", free_port()?);
+    let mut config = test_config(dir.path());
+    config.zenoh.listen = vec![endpoint.clone()];
+    config.zenoh.site = site.into();
+    config.demo.enabled = false;
+    let server = TestServer::start(config).await?;
+    let (code, body) = server.post(&format!("/v1/sites/{site}/map"), &map).await?;
+    if code != 201 {
+        bail!("map upload: {code} {body}");
+    }
+    let robot = Robot::join(&endpoint, "r1").await?;
+    let req = json!({"site": site, "start": start, "robot": {"radius": RADIUS, "tool_width": 0.3}});
+    let (_, acc) = server.post("/v1/plans", &req).await?;
+    let id = acc["plan_id"].as_str().context("plan id")?.to_owned();
+    server.wait_plan(&id, LONG, |s| s == "ready").await?;
+    let (code, st) = server.post(&format!("/v1/plans/{id}/assign"), &json!({"robot": "r1"})).await?;
+    if code != 200 {
+        bail!("assign: {code} {st}");
+    }
+    let (_, served) = server.get(&format!("/v1/plans/{id}/path")).await?;
+    let doc: PlanDocument = serde_json::from_value(served)?;
+    Ok((server, robot, doc, id, dir))
+}
+
+/// A server, its robot r1, the plan assigned to it, its id, and the data dir (kept while the test runs).
+type Planned = (TestServer, Robot, PlanDocument, String, tempfile::TempDir);
+
+/// The longest straight segment of the plan (its index), for placing the robot and the obstacle on it.
+fn longest_segment(w: &[WaypointDoc]) -> usize {
+    (0..w.len() - 1)
+        .max_by(|&a, &b| seg_len(w, a).total_cmp(&seg_len(w, b)))
+        .unwrap_or(0)
+}
+
+fn seg_len(w: &[WaypointDoc], i: usize) -> f64 {
+    (w[i + 1].x - w[i].x).hypot(w[i + 1].y - w[i].y)
+}
+
+fn along(w: &[WaypointDoc], i: usize, s: f64) -> (f64, f64, f64) {
+    let (a, b) = (&w[i], &w[i + 1]);
+    let l = seg_len(w, i);
+    let (ux, uy) = ((b.x - a.x) / l, (b.y - a.y) / l);
+    (a.x + ux * s, a.y + uy * s, uy.atan2(ux))
+}
+
+/// Distance from p to segment ab.
+fn seg_dist(p: (f64, f64), a: (f64, f64), b: (f64, f64)) -> f64 {
+    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+    let l2 = dx * dx + dy * dy;
+    let t = if l2 > 0.0 {
+        (((p.0 - a.0) * dx + (p.1 - a.1) * dy) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p.0 - a.0 - t * dx).hypot(p.1 - a.1 - t * dy)
+}
+
+/// Smallest distance between the path's segments in `range` (waypoint indices, inclusive ends) and the points.
+fn clearance(w: &[WaypointDoc], range: std::ops::Range<usize>, pts: &[[f32; 3]]) -> f64 {
+    let mut best = f64::INFINITY;
+    for i in range.start..range.end.min(w.len() - 1) {
+        for p in pts {
+            let d = seg_dist(
+                (f64::from(p[0]), f64::from(p[1])),
+                (w[i].x, w[i].y),
+                (w[i + 1].x, w[i + 1].y),
+            );
+            best = best.min(d);
+        }
+    }
+    best
+}
+
+/// Checks a correction against the document it patches: it applies, the stretches before `from` and from
+/// `to` on are the old ones, the patch is connected to them, and the whole new path keeps ≥ radius from
+/// every obstacle point. Returns the corrected document.
+fn check_correction(old: &PlanDocument, c: &CorrectionDoc, obstacle: &[[f32; 3]]) -> Result<PlanDocument> {
+    let new = c.apply(old).map_err(|e| anyhow!("{e}"))?;
+    assert_eq!(new.version, old.version + 1);
+    assert_eq!(&new.waypoints[..c.from], &old.waypoints[..c.from], "kept before the patch");
+    let tail = new.waypoints.len() - (old.waypoints.len() - c.to);
+    for (a, b) in new.waypoints[tail..].iter().zip(&old.waypoints[c.to..]) {
+        assert_eq!((a.x, a.y), (b.x, b.y), "kept after the patch");
+    }
+    let d = clearance(&new.waypoints, 0..new.waypoints.len(), obstacle);
+    assert!(d >= RADIUS - 1e-6, "corrected path comes {d:.3} m from an obstacle point (radius {RADIUS})");
+    for w in &c.waypoints {
+        assert!(w.v.is_finite() && w.v > 0.0 && w.t.is_finite(), "re-profiled speeds and times: {w:?}");
+    }
+    Ok(new)
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_obstacle_ahead_gets_a_clear_correction_the_robot_can_fetch() -> Result<()> {
+    let _ = tracing_subscriber::fmt()
+        .with_env_filter(tracing_subscriber::EnvFilter::new("warn,shiftd=info"))
+        .with_test_writer()
+        .try_init();
+    // An open 8 m × 4 m room.
+    let (server, robot, doc, id, _dir) = planned("room", grid(160, 80, &[]), [0.5, 0.5]).await?;
+    let w = &doc.waypoints;
+    let seg = longest_segment(w);
+    assert!(seg_len(w, seg) > 4.0, "a lane long enough to drive along");
+    // The robot drives onto the lane: poses along its first metre.
+    for k in 0..5 {
+        let pose = along(w, seg, 0.2 * k as f64);
+        robot.odom("r1", pose.0, pose.1, pose.2).await?;
+        tokio::time::sleep(Duration::from_millis(30)).await;
+    }
+    // A cluster of points (a 0.2 m post, 0.1-0.5 m high) on the lane 2 m ahead of the robot.
+    let (ox, oy, _) = along(w, seg, 0.8 + 2.0);
+    let mut post = Vec::new();
+    for i in 0..5 {
+        for j in 0..5 {
+            for k in 0..3 {
+                post.push([
+                    (ox - 0.1 + 0.05 * i as f64) as f32,
+                    (oy - 0.1 + 0.05 * j as f64) as f32,
+                    0.1 + 0.2 * k as f32,
+                ]);
+            }
+        }
+    }
+    assert!(clearance(w, seg..seg + 1, &post) < RADIUS, "the old path runs into the post");
+    robot.cloud("r1", &post).await?;
+
+    let c = robot.next_correction().await?;
+    assert_eq!((c.plan_id.as_str(), c.robot.as_str()), (id.as_str(), "r1"));
+    assert_eq!((c.base_version, c.version), (1, 2));
+    assert_ne!(c.reason, CorrectionReason::Skipped, "an open room leaves room to pass: {c:?}");
+    assert!(c.from <= seg + 1 && c.to >= seg, "the patch is where the post is: {c:?}");
+    assert!(c.compute_us > 0);
+    let new = check_correction(&doc, &c, &post)?;
+    // The patch joins the lane: its ends lie on the old segment's line.
+    for p in [&c.waypoints[0], &c.waypoints[c.waypoints.len() - 1]] {
+        let d = seg_dist((p.x, p.y), (w[seg].x, w[seg].y), (w[seg + 1].x, w[seg + 1].y));
+        assert!(d < 1e-6, "patch end {p:?} is {d} m off the old lane");
+    }
+    // The robot's plan query and the API both give the corrected version.
+    let fetched = robot.query_plan("r1").await?;
+    assert_eq!(fetched, new);
+    let (_, served) = server.get(&format!("/v1/plans/{id}/path")).await?;
+    assert_eq!(serde_json::from_value::<PlanDocument>(served)?, new);
+    let (_, st) = server.get(&format!("/v1/plans/{id}")).await?;
+    assert_eq!(st["version"], 2);
+    let (_, r) = server.get("/v1/robots/r1").await?;
+    assert_eq!(r["last_correction"]["version"], 2, "{r}");
+    robot.session.close().await.map_err(|e| anyhow!("{e}"))?;
+    server.stop().await
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_closed_corridor_is_skipped_not_driven_through() -> Result<()> {
+    // Two 3 m × 3 m rooms joined by a 0.6 m wide, 2 m long corridor (walls are 0.05 m cells).
+    let blocked = [(3.0, 0.0, 5.0, 1.2), (3.0, 1.8, 5.0, 3.0)];
+    let (server, robot, doc, id, _dir) = planned("rooms", grid(160, 60, &blocked), [0.5, 0.5]).await?;
+    let w = &doc.waypoints;
+    // Where the path first enters the corridor from the left room.
+    let enter = (0..w.len() - 1)
+        .find(|&i| w[i].x < 3.0 && w[i + 1].x > 3.0 && w[i].y > 1.2 && w[i].y < 1.8)
+        .or_else(|| (0..w.len() - 1).find(|&i| w[i].x <= 3.0 && w[i + 1].x >= 3.2))
+        .context("the plan crosses the corridor")?;
+    // The robot stands on that segment about 1.7 m before the wall (at x = 2.3, or the segment's start).
+    let (a, b) = (&w[enter], &w[enter + 1]);
+    let f = ((2.3 - a.x) / (b.x - a.x)).clamp(0.0, 1.0);
+    let (px, py) = (a.x + f * (b.x - a.x), a.y + f * (b.y - a.y));
+    let yaw = (b.y - a.y).atan2(b.x - a.x);
+    for _ in 0..3 {
+        robot.odom("r1", px, py, yaw).await?;
+        tokio::time::sleep(Duration::from_millis(30)).await;
+    }
+    // A wall of points across the corridor at x = 4.0 (the corridor is y ∈ [1.2, 1.8]).
+    let wall: Vec<[f32; 3]> = (0..=24)
+        .flat_map(|j| (0..3).map(move |k| [4.0, 1.2 + 0.025 * j as f32, 0.1 + 0.2 * k as f32]))
+        .collect();
+    robot.cloud("r1", &wall).await?;
+    let c = robot.next_correction().await?;
+    assert_eq!(c.reason, CorrectionReason::Skipped, "{c:?}");
+    assert!(!c.skipped.is_empty(), "the left-out stretch is reported");
+    let new = check_correction(&doc, &c, &wall)?;
+    let (_, st) = server.get(&format!("/v1/plans/{id}")).await?;
+    assert!(st["missed"].as_array().is_some_and(|m| !m.is_empty()), "{st}");
+    let fetched = robot.query_plan("r1").await?;
+    assert_eq!(fetched.version, new.version);
+    robot.session.close().await.map_err(|e| anyhow!("{e}"))?;
+    server.stop().await
+}
