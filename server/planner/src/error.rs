@@ -76,6 +76,9 @@ pub enum PlannerError {
     /// The caller asked the planner to stop.
     #[error("planning was cancelled")]
     Cancelled,
+    /// A plan correction (judge / repair / retime) was rejected.
+    #[error("correction: {0}")]
+    Correct(#[from] crate::correct::CorrectError),
 }
 
 /// Shorthand for planner results.

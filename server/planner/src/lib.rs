@@ -7,9 +7,11 @@
 //! Pipeline: [`map`] (grids, distance fields) → [`space`] (footprint, reach, coverable set) →
 //! `decompose` (regions) → `pattern` (lanes, spiral, boundary passes) → `order` (visiting order) →
 //! `link` (transits) → `metrics` (DESIGN §6); then `smooth` (B-spline corners) and `speed` (RFICP speed
-//! profile and times) post-process the finished path.
+//! profile and times) post-process the finished path. While a robot drives, `correct` judges the plan ahead
+//! of it against the live map and repairs the stretches that lost clearance (IKD-SWOpt).
 
 pub mod baseline;
+pub mod correct;
 pub mod decompose;
 pub mod error;
 pub mod geom;

@@ -99,6 +99,11 @@ impl DistanceField {
         &self.geometry
     }
 
+    /// True when the ring of cells just outside the map counts as sites (the map edge is a wall).
+    pub fn border_is_site(&self) -> bool {
+        self.pad == 1
+    }
+
     /// Distance in metres from the centre of cell `i` to the nearest site's centre.
     #[inline]
     pub fn at(&self, i: usize) -> f64 {

@@ -172,6 +172,44 @@ impl IkdTree {
         best.is_finite().then(|| best.sqrt())
     }
 
+    /// The valid point nearest to `q` with its squared distance (m²), like [`IkdTree::nearest`] with `k = 1`
+    /// but without allocating. `None` when the tree is empty or `q` is not finite.
+    ///
+    /// O(log n) expected.
+    pub fn nearest_point(&self, q: &Point3) -> Option<(Point3, f32)> {
+        if !q.is_finite() || self.root == NIL {
+            return None;
+        }
+        let mut best = (Point3::default(), f32::INFINITY);
+        self.nn1p_rec(self.root, q, false, &mut best);
+        best.1.is_finite().then_some(best)
+    }
+
+    fn nn1p_rec(&self, id: u32, q: &Point3, forced: bool, best: &mut (Point3, f32)) {
+        let n = &self.arena.nodes[id as usize];
+        if !forced && n.invalid == n.size {
+            return;
+        }
+        if n.is_leaf() {
+            let leaf = &self.arena.leaves[n.a as usize];
+            let dead = if forced { 0 } else { n.b };
+            for (i, p) in leaf.pts[..n.size as usize].iter().enumerate() {
+                let d2 = p.dist2(q);
+                if d2 < best.1 && dead & (1 << i) == 0 {
+                    *best = (*p, d2);
+                }
+            }
+            return;
+        }
+        let forced = forced || n.flags & F_RESTORE_ALL != 0;
+        let diff = q.get(n.axis as usize) - n.split;
+        let (near, far) = if diff < 0.0 { (n.a, n.b) } else { (n.b, n.a) };
+        self.nn1p_rec(near, q, forced, best);
+        if diff * diff < best.1 && self.arena.nodes[far as usize].bbox.dist2(q) < best.1 {
+            self.nn1p_rec(far, q, forced, best);
+        }
+    }
+
     fn nn1_rec(&self, id: u32, q: &Point3, forced: bool, best: &mut f32) {
         let n = &self.arena.nodes[id as usize];
         if !forced && n.invalid == n.size {

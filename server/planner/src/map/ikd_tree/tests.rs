@@ -121,6 +121,11 @@ fn check_queries(t: &IkdTree, o: &Oracle, q: &Point3, k: usize, r: f32, b: &Aabb
     let want: Vec<Point3> = o.points().into_iter().filter(|p| b.contains(p)).collect();
     prop_assert_eq!(sorted(got), sorted(want));
     prop_assert_eq!(t.nearest_distance(q), all.first().map(|d| d.sqrt()));
+    prop_assert_eq!(t.nearest_point(q).map(|g| g.1), all.first().copied());
+    if let Some((p, d)) = t.nearest_point(q) {
+        prop_assert!(live_keys.contains(&key(&p)));
+        prop_assert_eq!(p.dist2(q), d);
+    }
     Ok(())
 }
 
