@@ -227,6 +227,7 @@ mod tests {
             warnings: vec![],
             robot: None,
             driven_fraction: 0.0,
+            missed: Vec::new(),
             attempts: 0,
             created_ms: 0,
             updated_ms: at,
@@ -266,5 +267,58 @@ mod tests {
         );
         assert_eq!(store.history("p-10").expect("history").len(), 1);
         assert!(store.result("p-1").expect("read").is_none());
+    }
+
+    #[test]
+    fn corrections_commit_with_their_record_and_replay_to_the_current_version() {
+        use shift_proto::{CorrectionDoc, CorrectionReason, PlanMetricsDoc, WaypointDoc, WaypointKindDoc};
+        let wp = |x: f64| WaypointDoc {
+            x,
+            y: 0.0,
+            z: 0.0,
+            v: 0.5,
+            t: x,
+            kind: WaypointKindDoc::Cover,
+            region: None,
+        };
+        let doc = PlanDocument {
+            plan_id: "p-1".into(),
+            version: 1,
+            frame: "map".into(),
+            waypoints: (0..5).map(|i| wp(i as f64)).collect(),
+            regions: vec![],
+            metrics: PlanMetricsDoc::default(),
+        };
+        let correction = |base: u64, from: usize, to: usize, x: f64| CorrectionDoc {
+            plan_id: "p-1".into(),
+            robot: "r1".into(),
+            base_version: base,
+            version: base + 1,
+            from,
+            to,
+            waypoints: vec![wp(x)],
+            reason: CorrectionReason::Obstacle,
+            dt_after_s: 0.5,
+            skipped: vec![],
+            compute_us: 7,
+        };
+        let dir = tempfile::tempdir().expect("tempdir");
+        let c1 = correction(1, 1, 2, 1.5);
+        let c2 = correction(2, 3, 5, 9.0);
+        {
+            let store = Store::open(dir.path()).expect("open");
+            store.put_result("p-1", &doc).expect("result");
+            let mut rec = record("p-1", PlanStatus::Active, 1);
+            rec.version = 2;
+            store.put_correction(&rec, &c1).expect("c1");
+            rec.version = 3;
+            store.put_correction(&rec, &c2).expect("c2");
+        }
+        let store = Store::open(dir.path()).expect("reopen");
+        assert_eq!(store.corrections("p-1").expect("read"), vec![c1.clone(), c2.clone()]);
+        assert_eq!(store.plans().expect("plans")[0].version, 3);
+        let expected = c2.apply(&c1.apply(&doc).expect("c1 applies")).expect("c2 applies");
+        assert_eq!(store.current("p-1").expect("read"), Some(expected));
+        assert_eq!(store.result("p-1").expect("read"), Some(doc), "the computed version is kept");
     }
 }

@@ -9,7 +9,8 @@
 use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
-use shift_planner::correct::{self, CorrectParams, RepairKind, TimedPoint, World};
+use shift_planner::correct::{self, CorrectParams, RepairKind, TimedWaypoint, World};
+use shift_planner::speed::SpeedLimits;
 use shift_planner::geom::Point2;
 use shift_planner::map::ikd_tree::IkdTree;
 use shift_proto::{CorrectionReason, PlanDocument, WaypointDoc};
@@ -166,35 +167,33 @@ pub fn run_check(job: &CheckJob, live: Option<&IkdTree>) -> CheckOutcome {
         Ok(r) => r,
         Err(e) => return CheckOutcome::Failed(e.to_string()),
     };
-    let timed: Vec<TimedPoint> = w
-        .iter()
-        .map(|p| TimedPoint {
-            p: Point2::new(p.x, p.y),
-            v_mps: p.v,
-            t_s: p.t,
-        })
-        .collect();
+    let timed = |i: usize| TimedWaypoint {
+        position: path[i],
+        v_mps: w[i].v,
+        t_s: w[i].t,
+    };
+    let (from, to) = (repair.from.min(w.len()), repair.to.min(w.len()));
+    let before = from.checked_sub(1).map(timed);
+    let replaced: Vec<TimedWaypoint> = (from..to.max(from)).map(timed).collect();
+    let after = (to < w.len()).then(|| timed(to));
     let lim = job.limits;
-    let times = correct::retime(
-        &timed,
-        &repair,
-        lim.v_min_mps,
-        lim.v_max_mps,
-        lim.a_max_mps2,
-        lim.a_max_mps2,
-    );
+    let limits = SpeedLimits::new(lim.v_min_mps, lim.v_max_mps, lim.a_max_mps2);
+    let times = match correct::retime(before.as_ref(), &replaced, after.as_ref(), &repair.waypoints, &limits) {
+        Ok(t) => t,
+        Err(e) => return CheckOutcome::Failed(e.to_string()),
+    };
     // The patch inherits the kind and region of the stretch it replaces.
     let like = w[repair.from.min(w.len() - 1)];
     let waypoints = repair
         .waypoints
         .iter()
-        .zip(&times.points)
-        .map(|(p, t)| WaypointDoc {
+        .zip(times.v_mps.iter().zip(&times.t_s))
+        .map(|(p, (&v, &t))| WaypointDoc {
             x: p.x,
             y: p.y,
             z: like.z,
-            v: t.v_mps,
-            t: t.t_s,
+            v,
+            t,
             kind: like.kind,
             region: like.region,
         })
