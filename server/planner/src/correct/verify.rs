@@ -26,7 +26,8 @@ pub fn segment_clear(a: Point2, b: Point2, world: &World<'_>, robot_radius_m: f6
         return false;
     }
     let (n, delta) = samples(a, b, sample_step(world, robot_radius_m));
-    let need = (robot_radius_m * robot_radius_m + 0.25 * delta * delta).sqrt();
+    // 1 µm more covers the f32 rounding of live points and queries.
+    let need = (robot_radius_m * robot_radius_m + 0.25 * delta * delta).sqrt() + 1e-6;
     (0..=n).all(|j| world.clear_of(a + (b - a) * (j as f64 / n as f64), need))
 }
 
@@ -40,29 +41,4 @@ pub fn verify(points: &[Point2], world: &World<'_>, robot_radius_m: f64) -> bool
             .windows(2)
             .all(|w| segment_clear(w[0], w[1], world, robot_radius_m)),
     }
-}
-
-/// Smallest exact clearance (up to `upto` metres) over the samples of a polyline; 0 when a sample is off the
-/// map.
-pub(crate) fn min_clearance(points: &[Point2], world: &World<'_>, robot_radius_m: f64, upto: f64) -> f64 {
-    let step = sample_step(world, robot_radius_m);
-    let mut best = f64::INFINITY;
-    let mut visit = |q: Point2| {
-        let c = if world.inside(q) {
-            world.clearance_upto(q, upto)
-        } else {
-            0.0
-        };
-        best = best.min(c);
-    };
-    if let [p] = points {
-        visit(*p);
-    }
-    for w in points.windows(2) {
-        let (n, _) = samples(w[0], w[1], step);
-        for j in 0..=n {
-            visit(w[0] + (w[1] - w[0]) * (j as f64 / n as f64));
-        }
-    }
-    best
 }
