@@ -36,7 +36,7 @@ pub use error::CorrectError;
 pub use judge::{Breach, judge};
 pub use params::CorrectParams;
 pub use path::PathPos;
-pub use repair::repair;
+pub use repair::{optimise, repair};
 pub use retime::{Retimed, TimedWaypoint, retime};
 pub use verify::{segment_clear, verify};
 pub use world::World;

@@ -29,6 +29,38 @@ const SKIP_MAX_CELLS: usize = 250_000;
 /// breach, an inconsistent world, or a start anchor that is itself in collision; never returns a colliding
 /// patch.
 pub fn repair(path: &[Point2], breach: &Breach, world: &World<'_>, p: &CorrectParams) -> Result<Repair, CorrectError> {
+    let (r, s_a, s_b) = prepare(path, breach, world, p)?;
+    let mut plan = r.windows(s_a, s_b)?;
+    if let Some(rep) = r.optimise(&mut plan) {
+        return Ok(rep);
+    }
+    if let Some(rep) = r.detour(&mut plan) {
+        return Ok(rep);
+    }
+    Ok(r.skip(&plan))
+}
+
+/// Only the IKD-SWOpt stage of [`repair`]: the optimised patch of the first window (of growing length)
+/// whose optimum passes [`verify`], or `None` when no window up to `p.max_window_m` gives one. Same errors
+/// as [`repair`].
+pub fn optimise(
+    path: &[Point2],
+    breach: &Breach,
+    world: &World<'_>,
+    p: &CorrectParams,
+) -> Result<Option<Repair>, CorrectError> {
+    let (r, s_a, s_b) = prepare(path, breach, world, p)?;
+    let mut plan = r.windows(s_a, s_b)?;
+    Ok(r.optimise(&mut plan))
+}
+
+/// Checks the input and sets up a repair: the repairer and the breach's arc lengths.
+fn prepare<'a, 'w>(
+    path: &'a [Point2],
+    breach: &Breach,
+    world: &'a World<'w>,
+    p: &'a CorrectParams,
+) -> Result<(Repairer<'a, 'w>, f64, f64), CorrectError> {
     p.validate()?;
     world.check()?;
     if path.len() < 2 {
@@ -64,14 +96,31 @@ pub fn repair(path: &[Point2], breach: &Breach, world: &World<'_>, p: &CorrectPa
         )));
     }
     let s_e = arc.s_of(breach.earliest).min(s_a);
-    Repairer {
-        arc,
-        world,
-        p,
-        s_e,
-        h: sample_step(world, p.robot_radius_m),
-    }
-    .run(s_a, s_b)
+    Ok((
+        Repairer {
+            arc,
+            world,
+            p,
+            s_e,
+            h: sample_step(world, p.robot_radius_m),
+        },
+        s_a,
+        s_b,
+    ))
+}
+
+/// The windows of one repair and what the stages tried so far.
+struct Plan {
+    /// Start anchor of the first window (arc length, metres): where a skip starts.
+    start: f64,
+    /// End of the non-compliant core (arc length, metres).
+    core_end: f64,
+    /// Windows whose anchors and heading neighbours are clear, shortest first.
+    usable: Vec<Window>,
+    /// L-BFGS iterations spent.
+    iterations: u32,
+    /// (cost_before, cost_after) of the first window optimised.
+    costs: Option<(f64, f64)>,
 }
 
 /// One repair's shared state.
@@ -105,7 +154,8 @@ impl Repairer<'_, '_> {
         s
     }
 
-    fn run(&self, s_a: f64, s_b: f64) -> Result<Repair, CorrectError> {
+    /// The windows to try, longest last, and the end of the non-compliant core.
+    fn windows(&self, s_a: f64, s_b: f64) -> Result<Plan, CorrectError> {
         let p = self.p;
         let total = self.arc.total();
         // The whole non-compliant stretch around the breach (judging may have clipped it at its circle).
@@ -130,25 +180,22 @@ impl Repairer<'_, '_> {
                 windows.push((s0, s1));
             }
         }
-        let a0 = self.arc.point_at(windows[0].0);
-        if !self.world.clear_of(a0, p.robot_radius_m) {
-            // Any later window starts at the same or an earlier point; the earliest one decides.
+        // The skip starts from the latest clear start anchor; when none is clear the robot's own stretch is
+        // in collision and nothing can start there.
+        let clear = |s0: f64| self.world.clear_of(self.arc.point_at(s0), p.robot_radius_m);
+        let Some(start) = windows.iter().map(|w| w.0).find(|&s0| clear(s0)) else {
             let s0 = windows.iter().map(|w| w.0).fold(f64::INFINITY, f64::min);
             let a = self.arc.point_at(s0);
-            if !self.world.clear_of(a, p.robot_radius_m) {
-                return Err(CorrectError::AnchorInCollision {
-                    x: a.x,
-                    y: a.y,
-                    clearance_m: if self.world.inside(a) {
-                        self.world.clearance_upto(a, p.robot_radius_m)
-                    } else {
-                        0.0
-                    },
-                });
-            }
-        }
-        let mut iterations = 0;
-        let mut costs = (0.0, 0.0);
+            return Err(CorrectError::AnchorInCollision {
+                x: a.x,
+                y: a.y,
+                clearance_m: if self.world.inside(a) {
+                    self.world.clearance_upto(a, p.robot_radius_m)
+                } else {
+                    0.0
+                },
+            });
+        };
         let usable: Vec<Window> = windows
             .iter()
             .filter_map(|&(s0, s1)| Window::new(&self.arc, s0, s1, p.spacing_m))
@@ -159,30 +206,54 @@ impl Repairer<'_, '_> {
                     .all(|q| self.world.clear_of(*q, p.robot_radius_m))
             })
             .collect();
-        for win in &usable {
-            let opt = optimise_window(win, self.world, self.world, p);
-            iterations += opt.iterations;
-            if costs == (0.0, 0.0) {
-                costs = (opt.cost_before, opt.cost_after);
+        Ok(Plan {
+            start,
+            core_end: cb,
+            usable,
+            iterations: 0,
+            costs: None,
+        })
+    }
+
+    /// IKD-SWOpt over the plan's windows.
+    fn optimise(&self, plan: &mut Plan) -> Option<Repair> {
+        for win in &plan.usable {
+            let opt = optimise_window(win, self.world, self.world, self.p);
+            plan.iterations += opt.iterations;
+            if plan.costs.is_none() {
+                plan.costs = Some((opt.cost_before, opt.cost_after));
             }
             if opt.feasible {
-                return Ok(self.patch(
+                return Some(self.patch(
                     win.s0,
                     win.s1,
                     opt.points,
                     RepairKind::Optimised,
-                    iterations,
+                    plan.iterations,
                     (opt.cost_before, opt.cost_after),
                 ));
             }
         }
-        for win in &usable {
-            if let Some(points) = self.detour(win) {
+        None
+    }
+
+    /// A* detours over the plan's windows.
+    fn detour(&self, plan: &mut Plan) -> Option<Repair> {
+        let before = plan.costs.map_or(0.0, |c| c.0);
+        for win in &plan.usable {
+            if let Some(points) = self.detour_window(win) {
                 let after = self.polyline_cost(&points, win.h);
-                return Ok(self.patch(win.s0, win.s1, points, RepairKind::Detour, iterations, (costs.0, after)));
+                return Some(self.patch(
+                    win.s0,
+                    win.s1,
+                    points,
+                    RepairKind::Detour,
+                    plan.iterations,
+                    (before, after),
+                ));
             }
         }
-        Ok(self.skip(windows[0].0, cb, iterations, costs.0))
+        None
     }
 
     /// The repair for a patch from arc length s0 to s1.
@@ -235,7 +306,7 @@ impl Repairer<'_, '_> {
     }
 
     /// A* detour over a window: anchor, heading neighbour, shortcut cell path, heading neighbour, anchor.
-    fn detour(&self, win: &Window) -> Option<Vec<Point2>> {
+    fn detour_window(&self, win: &Window) -> Option<Vec<Point2>> {
         let r = self.p.robot_radius_m;
         let orig = self.arc.slice(win.s0, win.s1);
         let (lo, hi) = bbox(&orig);
@@ -251,7 +322,10 @@ impl Repairer<'_, '_> {
 
     /// The skip: transit from the start anchor to the first point after the blocked stretch the robot can
     /// reach, or stop at the anchor.
-    fn skip(&self, s0: f64, cb: f64, iterations: u32, cost_before: f64) -> Repair {
+    fn skip(&self, plan: &Plan) -> Repair {
+        let (s0, cb) = (plan.start, plan.core_end);
+        let iterations = plan.iterations;
+        let cost_before = plan.costs.map_or(0.0, |c| c.0);
         let r = self.p.robot_radius_m;
         let total = self.arc.total();
         let a0 = self.arc.point_at(s0);
