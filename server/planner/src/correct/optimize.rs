@@ -20,6 +20,12 @@ use super::path::Arclen;
 use super::verify::verify;
 use super::world::World;
 
+/// L-BFGS stops when no gradient component exceeds this (J per metre of displacement; the obstacle term's
+/// gradient is 4·w_obs·h·deficit/margin², so this is a sub-micrometre penetration at the defaults).
+const G_TOL: f64 = 1e-3;
+/// L-BFGS stops when an iteration lowers J by less than this fraction.
+const F_REL_TOL: f64 = 1e-5;
+
 /// A window of the original path: anchors, fixed heading neighbours and the original free points.
 #[derive(Debug, Clone)]
 pub(crate) struct Window {
@@ -156,16 +162,19 @@ fn lateral_start<O: Obstacles>(
             Vector2::zeros()
         }
     };
-    let clear = |q: Point2| obstacles.nearest(q).is_none_or(|(_, d)| d >= target);
+    let clearance = |q: Point2| obstacles.nearest(q).map_or(f64::INFINITY, |(_, d)| d);
     let mut need = vec![0.0; n];
     for (i, q) in win.free.iter().enumerate() {
-        if clear(*q) {
-            continue;
-        }
+        // Sphere tracing along the normal: clearance is 1-Lipschitz, so no offset before o + (target − c)
+        // can clear the target, and the jump never passes the first clear offset.
         let nv = normal(i);
-        let mut o = step;
-        while o <= max_offset && !clear(q + nv * o) {
-            o += step;
+        let mut o = 0.0;
+        loop {
+            let c = clearance(q + nv * o);
+            if c >= target || o > max_offset {
+                break;
+            }
+            o += (target - c).max(step);
         }
         need[i] = o.min(max_offset);
     }
@@ -212,7 +221,7 @@ pub(crate) fn optimise_window<O: Obstacles>(
     let mut iterations = 0;
     let mut best: Option<Optimised> = None;
     for (_, x0) in starts {
-        let min = minimize(&mut cost, &x0, p.max_iterations, 6, 1e-7, 1e-9);
+        let min = minimize(&mut cost, &x0, p.max_iterations, 6, G_TOL, F_REL_TOL);
         iterations += min.iterations;
         let points = win.with_free(&unflatten(&min.x));
         let feasible = verify(&points, world, p.robot_radius_m);
