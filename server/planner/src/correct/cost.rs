@@ -13,9 +13,9 @@
 //! (`2/h · tridiag(−1, 2, −1)` and `2/h³ · [1, −4, 6, −4, 1]`); J_obs adds `2·h / margin²` along the
 //! obstacle normal of every point in the hinge. That matrix is the L-BFGS preconditioner.
 
-use crate::geom::Point2;
+use crate::geom::{Point2, Vector2};
 
-use super::lbfgs::{Banded, Objective};
+use super::lbfgs::{BandChol, Objective};
 use super::world::World;
 
 /// The nearest obstacle point of a map-frame point, with its distance (metres).
@@ -50,11 +50,9 @@ pub(crate) struct WindowCost<'o, O: Obstacles> {
     pub(crate) tail: [Point2; 2],
     pub(crate) w: Weights,
     pub(crate) obstacles: &'o O,
-    /// Which free points were in the obstacle hinge at the last evaluation.
-    contact: Vec<bool>,
-    factored_for: Vec<bool>,
-    band: Banded,
-    band_ok: bool,
+    /// Unit obstacle normal of each free point in the obstacle hinge at the last evaluation.
+    contact: Vec<Option<Vector2>>,
+    band: BandChol,
     pts: Vec<Point2>,
 }
 
@@ -65,10 +63,8 @@ impl<'o, O: Obstacles> WindowCost<'o, O> {
             tail,
             w,
             obstacles,
-            contact: vec![false; n],
-            factored_for: Vec::new(),
-            band: Banded::default(),
-            band_ok: false,
+            contact: vec![None; n],
+            band: BandChol::default(),
             pts: Vec::with_capacity(n + 4),
         }
     }
@@ -79,22 +75,36 @@ impl<'o, O: Obstacles> WindowCost<'o, O> {
         self.eval(x, &mut g)
     }
 
-    fn refactor(&mut self) {
+    /// Factors H₀: the quadratic terms' Hessian on both coordinates (interleaved, bandwidth 4) plus
+    /// `2·w_obs·h/margin² · n nᵀ` for every point in the hinge, and a small ridge. False when not positive
+    /// definite (then no preconditioning).
+    fn refactor(&mut self) -> bool {
         let n = self.contact.len();
         let w = &self.w;
         let a = 2.0 * w.w_len / w.h;
         let b = 2.0 * w.w_smooth / w.h.powi(3);
         let k_obs = 2.0 * w.w_obs * w.h / (w.margin * w.margin);
         let reg = 1e-3 * k_obs + 1e-9 * (a + b);
-        let d0: Vec<f64> = self
-            .contact
-            .iter()
-            .map(|&c| 2.0 * a + 6.0 * b + if c { k_obs } else { reg })
-            .collect();
-        let d1 = vec![-a - 4.0 * b; n.saturating_sub(1)];
-        let d2 = vec![b; n.saturating_sub(2)];
-        self.band_ok = self.band.factor(&d0, &d1, &d2);
-        self.factored_for.clone_from(&self.contact);
+        self.band.reset(2 * n, 4);
+        for v in 0..n {
+            for c in 0..2 {
+                let i = 2 * v + c;
+                self.band.add(i, i, 2.0 * a + 6.0 * b + reg);
+                if v >= 1 {
+                    self.band.add(i, i - 2, -a - 4.0 * b);
+                }
+                if v >= 2 {
+                    self.band.add(i, i - 4, b);
+                }
+            }
+            if let Some(nv) = self.contact[v] {
+                let i = 2 * v;
+                self.band.add(i, i, k_obs * nv.x * nv.x);
+                self.band.add(i + 1, i + 1, k_obs * nv.y * nv.y);
+                self.band.add(i + 1, i, k_obs * nv.x * nv.y);
+            }
+        }
+        self.band.factor()
     }
 }
 
@@ -135,7 +145,7 @@ impl<O: Obstacles> Objective for WindowCost<'_, O> {
         let co = w.w_obs * w.h / (w.margin * w.margin);
         for (v, c) in self.contact.iter_mut().enumerate() {
             let p = pts[v + 2];
-            *c = false;
+            *c = None;
             let Some((q, d)) = self.obstacles.nearest(p) else {
                 continue;
             };
@@ -143,9 +153,9 @@ impl<O: Obstacles> Objective for WindowCost<'_, O> {
             if deficit <= 0.0 {
                 continue;
             }
-            *c = true;
             f += co * deficit * deficit;
             if d > 1e-12 {
+                *c = Some((p - q) / d);
                 // d(deficit²)/dp = −2 deficit (p − q)/d.
                 let k = -2.0 * co * deficit / d;
                 g[2 * v] += k * (p.x - q.x);
@@ -157,12 +167,8 @@ impl<O: Obstacles> Objective for WindowCost<'_, O> {
     }
 
     fn precondition(&mut self, v: &mut [f64]) {
-        if self.factored_for != self.contact || self.band.l0_len() != self.contact.len() {
-            self.refactor();
-        }
-        if self.band_ok {
-            self.band.solve_strided(v, 0, 2);
-            self.band.solve_strided(v, 1, 2);
+        if self.refactor() {
+            self.band.solve(v);
         }
     }
 }

@@ -1,8 +1,9 @@
 //! A small limited-memory BFGS minimiser with a banded preconditioner and a backtracking Armijo line search.
 //!
 //! Why our own and not `argmin`: the window problem has a known, banded (pentadiagonal) Hessian for its
-//! quadratic terms (J_len, J_smooth) plus a diagonal stiffness from the active obstacle hinges. L-BFGS with
-//! that matrix as its initial Hessian H₀ (applied through an O(n) banded Cholesky solve) starts from an exact
+//! quadratic terms (J_len, J_smooth) plus a 2 × 2 stiffness along the obstacle normal of every active
+//! hinge (Gauss–Newton). L-BFGS with
+//! that matrix as its initial Hessian H₀ (applied through an O(n) band Cholesky solve) starts from an exact
 //! Newton step for the quadratic part, so it converges in a handful of iterations where a scalar-H₀ L-BFGS
 //! needs dozens on a problem conditioned like spacing⁻⁴. argmin's L-BFGS takes only a scalar H₀ and boxes
 //! every iterate in its state machinery; this one allocates its buffers once per call and nothing per
@@ -142,76 +143,78 @@ fn axpy(a: f64, x: &[f64], y: &mut [f64]) {
     }
 }
 
-/// A symmetric positive definite pentadiagonal matrix factored as L·Lᵀ (bandwidth 2), for O(n) solves.
+/// A symmetric positive definite band matrix (bandwidth `bw`: A[i][j] = 0 for |i − j| > bw) factored as
+/// L·Lᵀ, for O(n·bw²) factorisation and O(n·bw) solves.
 #[derive(Debug, Clone, Default)]
-pub(crate) struct Banded {
-    /// L's diagonal, first and second sub-diagonal.
-    l0: Vec<f64>,
-    l1: Vec<f64>,
-    l2: Vec<f64>,
+pub(crate) struct BandChol {
+    n: usize,
+    bw: usize,
+    /// `a[i·(bw+1) + k]` = A[i][i−k] before factoring, L[i][i−k] after.
+    a: Vec<f64>,
 }
 
-impl Banded {
-    /// Factors the matrix with diagonal `d0`, first off-diagonal `d1` (`d1[i]` = A[i][i+1]) and second
-    /// off-diagonal `d2`. Returns false when it is not positive definite.
-    pub(crate) fn factor(&mut self, d0: &[f64], d1: &[f64], d2: &[f64]) -> bool {
-        let n = d0.len();
-        self.l0.resize(n, 0.0);
-        self.l1.resize(n, 0.0);
-        self.l2.resize(n, 0.0);
+impl BandChol {
+    /// A zero matrix of size `n` and bandwidth `bw`, ready for [`BandChol::add`].
+    pub(crate) fn reset(&mut self, n: usize, bw: usize) {
+        self.n = n;
+        self.bw = bw;
+        self.a.clear();
+        self.a.resize(n * (bw + 1), 0.0);
+    }
+
+    /// A[i][j] += v (and A[j][i]); |i − j| must be ≤ bw.
+    #[inline]
+    pub(crate) fn add(&mut self, i: usize, j: usize, v: f64) {
+        let (i, j) = if i >= j { (i, j) } else { (j, i) };
+        let k = i - j;
+        if k <= self.bw && i < self.n {
+            self.a[i * (self.bw + 1) + k] += v;
+        }
+    }
+
+    /// Factors in place; false when the matrix is not positive definite.
+    pub(crate) fn factor(&mut self) -> bool {
+        let (n, bw) = (self.n, self.bw);
+        let w = bw + 1;
         for i in 0..n {
-            // Row i: A[i][i-2] = d2[i-2], A[i][i-1] = d1[i-1].
-            let l2 = if i >= 2 { d2[i - 2] / self.l0[i - 2] } else { 0.0 };
-            let l1 = if i >= 1 {
-                let mut v = d1[i - 1];
-                if i >= 2 {
-                    v -= l2 * self.l1[i - 1];
+            for k in (0..=bw.min(i)).rev() {
+                let j = i - k;
+                // Σ_m L[i][m] L[j][m] over m in [i − bw, j).
+                let lo = i.saturating_sub(bw);
+                let mut sum = self.a[i * w + k];
+                for m in lo..j {
+                    sum -= self.a[i * w + (i - m)] * self.a[j * w + (j - m)];
                 }
-                v / self.l0[i - 1]
-            } else {
-                0.0
-            };
-            let diag = d0[i] - l1 * l1 - l2 * l2;
-            if !(diag > 0.0) {
-                return false;
+                if k == 0 {
+                    if !(sum > 0.0) {
+                        return false;
+                    }
+                    self.a[i * w] = sum.sqrt();
+                } else {
+                    self.a[i * w + k] = sum / self.a[j * w];
+                }
             }
-            self.l0[i] = diag.sqrt();
-            self.l1[i] = l1; // L[i][i-1]
-            self.l2[i] = l2; // L[i][i-2]
         }
         true
     }
 
-    /// Size of the last factored matrix.
-    pub(crate) fn l0_len(&self) -> usize {
-        self.l0.len()
-    }
-
-    /// Solves A z = v in place, reading `v` with `stride` (entries `v[offset + stride·i]`).
-    pub(crate) fn solve_strided(&self, v: &mut [f64], offset: usize, stride: usize) {
-        let n = self.l0.len();
-        let at = |i: usize| offset + stride * i;
-        // Forward: L y = v.
+    /// Solves A z = v in place (after [`BandChol::factor`]).
+    pub(crate) fn solve(&self, v: &mut [f64]) {
+        let (n, bw) = (self.n, self.bw);
+        let w = bw + 1;
         for i in 0..n {
-            let mut s = v[at(i)];
-            if i >= 1 {
-                s -= self.l1[i] * v[at(i - 1)];
+            let mut s = v[i];
+            for k in 1..=bw.min(i) {
+                s -= self.a[i * w + k] * v[i - k];
             }
-            if i >= 2 {
-                s -= self.l2[i] * v[at(i - 2)];
-            }
-            v[at(i)] = s / self.l0[i];
+            v[i] = s / self.a[i * w];
         }
-        // Backward: Lᵀ z = y.
         for i in (0..n).rev() {
-            let mut s = v[at(i)];
-            if i + 1 < n {
-                s -= self.l1[i + 1] * v[at(i + 1)];
+            let mut s = v[i];
+            for k in 1..=bw.min(n - 1 - i) {
+                s -= self.a[(i + k) * w + k] * v[i + k];
             }
-            if i + 2 < n {
-                s -= self.l2[i + 2] * v[at(i + 2)];
-            }
-            v[at(i)] = s / self.l0[i];
+            v[i] = s / self.a[i * w];
         }
     }
 }
@@ -222,7 +225,7 @@ mod tests {
 
     /// f = Σ a_i (x_i − 1)² + coupling, preconditioned by a banded approximation.
     struct Quad {
-        band: Banded,
+        band: BandChol,
         n: usize,
     }
 
@@ -241,7 +244,7 @@ mod tests {
             f
         }
         fn precondition(&mut self, v: &mut [f64]) {
-            self.band.solve_strided(v, 0, 1);
+            self.band.solve(v);
         }
     }
 
@@ -251,11 +254,21 @@ mod tests {
         let d0: Vec<f64> = (0..n).map(|i| 6.0 + i as f64 * 0.1).collect();
         let d1 = vec![-4.0; n - 1];
         let d2 = vec![1.0; n - 2];
-        let mut b = Banded::default();
-        assert!(b.factor(&d0, &d1, &d2));
+        let mut b = BandChol::default();
+        b.reset(n, 2);
+        for i in 0..n {
+            b.add(i, i, d0[i]);
+            if i >= 1 {
+                b.add(i, i - 1, d1[i - 1]);
+            }
+            if i >= 2 {
+                b.add(i, i - 2, d2[i - 2]);
+            }
+        }
+        assert!(b.factor());
         let rhs: Vec<f64> = (0..n).map(|i| (i as f64).sin()).collect();
         let mut z = rhs.clone();
-        b.solve_strided(&mut z, 0, 1);
+        b.solve(&mut z);
         for i in 0..n {
             let mut az = d0[i] * z[i];
             if i >= 1 {
@@ -277,8 +290,15 @@ mod tests {
     #[test]
     fn converges_on_a_coupled_problem() {
         let n = 20;
-        let mut band = Banded::default();
-        assert!(band.factor(&vec![3.5; n], &vec![-1.0; n - 1], &vec![0.0; n - 2]));
+        let mut band = BandChol::default();
+        band.reset(n, 2);
+        for i in 0..n {
+            band.add(i, i, 3.5);
+            if i >= 1 {
+                band.add(i, i - 1, -1.0);
+            }
+        }
+        assert!(band.factor());
         let mut q = Quad { band, n };
         let x0 = vec![-2.0; n];
         let mut g = vec![0.0; n];

@@ -20,6 +20,7 @@ mod detour;
 mod error;
 mod judge;
 mod lbfgs;
+mod local;
 mod optimize;
 mod params;
 mod path;

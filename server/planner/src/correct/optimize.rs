@@ -204,9 +204,9 @@ pub(crate) fn optimise_window<O: Obstacles>(
 ) -> Optimised {
     let w = weights(p, win.h);
     let mut cost = WindowCost::new(win.head, win.tail, w, obstacles, win.free.len());
+    let max_offset = 0.5 * (win.s1 - win.s0);
     let x_orig = flatten(&win.free);
     let cost_before = cost.value(&x_orig);
-    let max_offset = 0.5 * (win.s1 - win.s0);
     let step = (0.5 * world.resolution()).max(0.5 * p.margin_m);
     let target = p.d_safe() + 0.5 * p.margin_m;
     let mut starts: Vec<(f64, Vec<f64>)> = vec![(cost_before, x_orig)];

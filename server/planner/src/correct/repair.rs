@@ -7,6 +7,7 @@ use super::cost::WindowCost;
 use super::detour::{LocalGrid, shortcut_chain};
 use super::error::CorrectError;
 use super::judge::{Breach, sample_step};
+use super::local::LocalObstacles;
 use super::optimize::{Window, end_segment, optimise_window, start_segment, weights};
 use super::params::CorrectParams;
 use super::path::Arclen;
@@ -217,8 +218,13 @@ impl Repairer<'_, '_> {
 
     /// IKD-SWOpt over the plan's windows.
     fn optimise(&self, plan: &mut Plan) -> Option<Repair> {
+        let p = self.p;
         for win in &plan.usable {
-            let opt = optimise_window(win, self.world, self.world, self.p);
+            let (lo, hi) = bbox(&win.with_free(&win.free));
+            let reach = 0.5 * (win.s1 - win.s0) + p.d_safe() + p.margin_m;
+            let pad = Point2::new(reach, reach).coords;
+            let local = LocalObstacles::new(self.world, lo - pad, hi + pad, p.d_safe() + p.margin_m);
+            let opt = optimise_window(win, &local, self.world, p);
             plan.iterations += opt.iterations;
             if plan.costs.is_none() {
                 plan.costs = Some((opt.cost_before, opt.cost_after));
