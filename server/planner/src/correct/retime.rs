@@ -152,6 +152,10 @@ mod tests {
         assert!((r.t_s[0] - 12.0).abs() < 1e-9 && (r.t_s[1] - 14.0).abs() < 1e-9);
         assert!(r.dt_after_s.abs() < 1e-9);
         // A detour is longer: later waypoints shift, the corner slows the robot.
+        let limits = SpeedLimits {
+            a_lat_mps2: 0.2,
+            ..limits
+        };
         let detour = [Point2::new(1.0, 0.0), Point2::new(1.5, 1.0), Point2::new(2.0, 0.0)];
         let r = retime(Some(&before), &replaced, Some(&after), &detour, &limits).expect("ok");
         assert_eq!(r.v_mps.len(), 3);

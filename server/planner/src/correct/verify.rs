@@ -4,20 +4,15 @@
 //!
 //! Sampling is made exact for the continuous segment: between two samples δ apart that are both at least
 //! ρ from an obstacle point, the segment stays at least √(ρ² − δ²/4) from it, so each sample must keep
-//! √(r² + δ²/4) (a fraction of a millimetre more than r at the usual δ). The map is a rectangle, so samples
-//! on the map mean the whole segment is.
+//! √(r² + δ²/4) (a fraction of a millimetre more than r at the usual δ). Where a cheap lower bound of the
+//! clearance ([`World::clearance_lower_bound`]) exceeds r + δ, the samples jump ahead by that excess
+//! (sphere tracing: clearance is 1-Lipschitz, so every point skipped is clear). The map is a rectangle, so
+//! both ends on the map mean the whole segment is.
 
 use crate::geom::Point2;
 
 use super::judge::sample_step;
 use super::world::World;
-
-/// The samples of segment `a`–`b` (both ends included) at most `step` apart, and their spacing.
-fn samples(a: Point2, b: Point2, step: f64) -> (usize, f64) {
-    let len = (b - a).norm();
-    let n = ((len / step).ceil() as usize).max(1);
-    (n, len / n as f64)
-}
 
 /// True when the straight segment `a`–`b` (map frame, metres) keeps at least `robot_radius_m` from every
 /// obstacle of `world` and lies on the map.
@@ -25,9 +20,32 @@ pub fn segment_clear(a: Point2, b: Point2, world: &World<'_>, robot_radius_m: f6
     if !(a.x.is_finite() && a.y.is_finite() && b.x.is_finite() && b.y.is_finite()) {
         return false;
     }
-    let (n, delta) = samples(a, b, sample_step(world, robot_radius_m));
-    let need = (robot_radius_m * robot_radius_m + 0.25 * delta * delta).sqrt();
-    (0..=n).all(|j| world.clear_of(a + (b - a) * (j as f64 / n as f64), need))
+    let len = (b - a).norm();
+    let delta = sample_step(world, robot_radius_m);
+    // 1 µm more covers the f32 rounding of live points and queries.
+    let need = (robot_radius_m * robot_radius_m + 0.25 * delta * delta).sqrt() + 1e-6;
+    if !(world.inside(a) && world.inside(b)) {
+        return false;
+    }
+    let dir = if len > 0.0 { (b - a) / len } else { (b - a) * 0.0 };
+    let mut s = 0.0;
+    loop {
+        let q = a + dir * s;
+        // Far from everything: every point within (lower bound − r) of q is clear (clearance is
+        // 1-Lipschitz), so jump; near obstacles, step δ and demand the chord-sag clearance.
+        let jump = world.clearance_lower_bound(q) - robot_radius_m - 1e-6;
+        let advance = if jump > delta {
+            jump
+        } else if world.clear_of(q, need) {
+            delta
+        } else {
+            return false;
+        };
+        if s >= len {
+            return true;
+        }
+        s = (s + advance).min(len);
+    }
 }
 
 /// True when every segment of the polyline `points` passes [`segment_clear`] (a single point must be clear
@@ -40,29 +58,4 @@ pub fn verify(points: &[Point2], world: &World<'_>, robot_radius_m: f64) -> bool
             .windows(2)
             .all(|w| segment_clear(w[0], w[1], world, robot_radius_m)),
     }
-}
-
-/// Smallest exact clearance (up to `upto` metres) over the samples of a polyline; 0 when a sample is off the
-/// map.
-pub(crate) fn min_clearance(points: &[Point2], world: &World<'_>, robot_radius_m: f64, upto: f64) -> f64 {
-    let step = sample_step(world, robot_radius_m);
-    let mut best = f64::INFINITY;
-    let mut visit = |q: Point2| {
-        let c = if world.inside(q) {
-            world.clearance_upto(q, upto)
-        } else {
-            0.0
-        };
-        best = best.min(c);
-    };
-    if let [p] = points {
-        visit(*p);
-    }
-    for w in points.windows(2) {
-        let (n, _) = samples(w[0], w[1], step);
-        for j in 0..=n {
-            visit(w[0] + (w[1] - w[0]) * (j as f64 / n as f64));
-        }
-    }
-    best
 }

@@ -167,6 +167,15 @@ impl<'a> World<'a> {
         best2.sqrt()
     }
 
+    /// A guaranteed lower bound of the clearance of `p`, metres: the field's static distance less the √2 ·
+    /// resolution band, and the live distance. Cheap (no scan).
+    #[inline]
+    pub fn clearance_lower_bound(&self, p: Point2) -> f64 {
+        let fast = self.nearest_static_fast(p).map_or(f64::INFINITY, |(_, d)| d);
+        let band = std::f64::consts::SQRT_2 * self.resolution();
+        (fast - band).max(0.0).min(self.live_clearance(p))
+    }
+
     /// Exact clearance of `p` (metres) whenever it is below `upto`: min of the exact static distance and the
     /// live distance. Values ≥ `upto` are only known to be ≥ `upto`.
     #[inline]
