@@ -7,120 +7,12 @@ use std::time::Duration;
 
 use anyhow::{Context, Result, anyhow, bail};
 use serde_json::{Value, json};
-use shift_proto::ros::point_cloud2::encode_point_cloud2_xyz;
-use shift_proto::ros::{Header, Time};
 use shift_proto::{CorrectionDoc, CorrectionReason, PlanDocument, WaypointDoc};
+use shift_tests::fleet::{ScriptedRobot, free_port, room_grid};
 use shift_tests::{TestServer, test_config};
-use zenoh::bytes::Encoding;
 
 const LONG: Duration = Duration::from_secs(120);
 const RADIUS: f64 = 0.15;
-
-fn free_port() -> Result<u16> {
-    Ok(std::net::TcpListener::bind("127.0.0.1:0")?.local_addr()?.port())
-}
-
-async fn robot_session(endpoint: &str) -> Result<zenoh::Session> {
-    let mut c = zenoh::Config::default();
-    let set = |c: &mut zenoh::Config, k: &str, v: &str| c.insert_json5(k, v).map_err(|e| anyhow!("{k}: {e}"));
-    set(&mut c, "mode", "\"peer\"")?;
-    set(&mut c, "listen/endpoints", "[]")?;
-    set(&mut c, "connect/endpoints", &format!("[\"{endpoint}\"]"))?;
-    set(&mut c, "scouting/multicast/enabled", "false")?;
-    set(&mut c, "scouting/gossip/enabled", "false")?;
-    zenoh::open(c).await.map_err(|e| anyhow!("robot session: {e}"))
-}
-
-/// A JSON grid (DESIGN §5.3) of `w × h` cells at 0.05 m, free inside a one-cell wall ring, with `blocked`
-/// extra occupied rectangles `(x0, y0, x1, y1)` in metres.
-fn grid(w: usize, h: usize, blocked: &[(f64, f64, f64, f64)]) -> Value {
-    let res = 0.05;
-    let mut cells = vec![0i32; w * h];
-    for r in 0..h {
-        for c in 0..w {
-            let (x, y) = ((c as f64 + 0.5) * res, (r as f64 + 0.5) * res);
-            let wall = r == 0 || c == 0 || r + 1 == h || c + 1 == w;
-            let inside = blocked
-                .iter()
-                .any(|&(x0, y0, x1, y1)| x >= x0 && x <= x1 && y >= y0 && y <= y1);
-            if wall || inside {
-                cells[r * w + c] = 100;
-            }
-        }
-    }
-    json!({"resolution": res, "origin": [0.0, 0.0], "width": w, "height": h, "cells": cells})
-}
-
-struct Robot {
-    session: zenoh::Session,
-    _token: zenoh::liveliness::LivelinessToken,
-    corrections: zenoh::pubsub::Subscriber<zenoh::handlers::FifoChannelHandler<zenoh::sample::Sample>>,
-}
-
-impl Robot {
-    async fn join(endpoint: &str, name: &str) -> Result<Self> {
-        let session = robot_session(endpoint).await?;
-        let token = session
-            .liveliness()
-            .declare_token(format!("shift/default/robots/{name}/alive"))
-            .await
-            .map_err(|e| anyhow!("{e}"))?;
-        let corrections = session
-            .declare_subscriber(format!("shift/default/robots/{name}/corrections"))
-            .await
-            .map_err(|e| anyhow!("{e}"))?;
-        Ok(Self {
-            session,
-            _token: token,
-            corrections,
-        })
-    }
-
-    async fn odom(&self, name: &str, x: f64, y: f64, yaw: f64) -> Result<()> {
-        let body = json!({"x": x, "y": y, "yaw": yaw, "vx": 0.3, "vy": 0.0, "wz": 0.0, "stamp": 1.0});
-        self.session
-            .put(format!("shift/default/robots/{name}/odom"), serde_json::to_vec(&body)?)
-            .encoding(Encoding::APPLICATION_JSON)
-            .await
-            .map_err(|e| anyhow!("{e}"))
-    }
-
-    async fn cloud(&self, name: &str, pts: &[[f32; 3]]) -> Result<()> {
-        let header = Header {
-            stamp: Time { sec: 2, nanosec: 0 },
-            frame_id: "map".into(),
-        };
-        self.session
-            .put(
-                format!("shift/default/robots/{name}/cloud"),
-                encode_point_cloud2_xyz(&header, pts),
-            )
-            .encoding(Encoding::APPLICATION_CDR)
-            .await
-            .map_err(|e| anyhow!("{e}"))
-    }
-
-    async fn next_correction(&self) -> Result<CorrectionDoc> {
-        let sample = tokio::time::timeout(LONG, self.corrections.recv_async())
-            .await
-            .context("no correction arrived")?
-            .map_err(|e| anyhow!("{e}"))?;
-        Ok(serde_json::from_slice(&sample.payload().to_bytes())?)
-    }
-
-    async fn query_plan(&self, name: &str) -> Result<PlanDocument> {
-        let replies = self
-            .session
-            .get(format!("shift/default/robots/{name}/plan"))
-            .await
-            .map_err(|e| anyhow!("{e}"))?;
-        let reply = tokio::time::timeout(LONG, replies.recv_async())
-            .await?
-            .map_err(|e| anyhow!("{e}"))?;
-        let sample = reply.result().map_err(|e| anyhow!("query error {e:?}"))?;
-        Ok(serde_json::from_slice(&sample.payload().to_bytes())?)
-    }
-}
 
 /// Starts a server with Zenoh on a free loopback port, uploads `map` as site `site`, plans from `start` and
 /// assigns the plan to robot r1 (which joined first). Returns the server, the robot and the plan.
@@ -136,7 +28,7 @@ async fn planned(site: &str, map: Value, start: [f64; 2]) -> Result<Planned> {
     if code != 201 {
         bail!("map upload: {code} {body}");
     }
-    let robot = Robot::join(&endpoint, "r1").await?;
+    let robot = ScriptedRobot::join(&endpoint, "r1").await?;
     let req = json!({"site": site, "start": start, "robot": {"radius": RADIUS, "tool_width": 0.3}});
     let (_, acc) = server.post("/v1/plans", &req).await?;
     let id = acc["plan_id"].as_str().context("plan id")?.to_owned();
@@ -151,22 +43,34 @@ async fn planned(site: &str, map: Value, start: [f64; 2]) -> Result<Planned> {
 }
 
 /// A server, its robot r1, the plan assigned to it, its id, and the data dir (kept while the test runs).
-type Planned = (TestServer, Robot, PlanDocument, String, tempfile::TempDir);
+type Planned = (TestServer, ScriptedRobot, PlanDocument, String, tempfile::TempDir);
 
-/// The longest straight segment of the plan (its index), for placing the robot and the obstacle on it.
-fn longest_segment(w: &[WaypointDoc]) -> usize {
-    (0..w.len() - 1)
-        .max_by(|&a, &b| seg_len(w, a).total_cmp(&seg_len(w, b)))
-        .unwrap_or(0)
+/// The longest straight stretch of the plan, as waypoint indices `(i, j)`: every waypoint between lies on
+/// the line from `i` to `j` (the document samples lanes densely for its speed profile).
+fn longest_straight(w: &[WaypointDoc]) -> (usize, usize) {
+    let mut best = (0, 1);
+    let mut i = 0;
+    while i + 1 < w.len() {
+        let mut j = i + 1;
+        while j + 1 < w.len() && (i + 1..=j).all(|k| seg_dist((w[k].x, w[k].y), (w[i].x, w[i].y), (w[j + 1].x, w[j + 1].y)) < 1e-6) {
+            j += 1;
+        }
+        if dist(w, i, j) > dist(w, best.0, best.1) {
+            best = (i, j);
+        }
+        i = j;
+    }
+    best
 }
 
-fn seg_len(w: &[WaypointDoc], i: usize) -> f64 {
-    (w[i + 1].x - w[i].x).hypot(w[i + 1].y - w[i].y)
+fn dist(w: &[WaypointDoc], i: usize, j: usize) -> f64 {
+    (w[j].x - w[i].x).hypot(w[j].y - w[i].y)
 }
 
-fn along(w: &[WaypointDoc], i: usize, s: f64) -> (f64, f64, f64) {
-    let (a, b) = (&w[i], &w[i + 1]);
-    let l = seg_len(w, i);
+/// The point `s` metres from waypoint `i` towards waypoint `j`, and the heading.
+fn along(w: &[WaypointDoc], (i, j): (usize, usize), s: f64) -> (f64, f64, f64) {
+    let (a, b) = (&w[i], &w[j]);
+    let l = dist(w, i, j);
     let (ux, uy) = ((b.x - a.x) / l, (b.y - a.y) / l);
     (a.x + ux * s, a.y + uy * s, uy.atan2(ux))
 }
@@ -200,9 +104,9 @@ fn clearance(w: &[WaypointDoc], range: std::ops::Range<usize>, pts: &[[f32; 3]])
 }
 
 /// Checks a correction against the document it patches: it applies, the stretches before `from` and from
-/// `to` on are the old ones, the patch is connected to them, and the whole new path keeps ≥ radius from
-/// every obstacle point. Returns the corrected document.
-fn check_correction(old: &PlanDocument, c: &CorrectionDoc, obstacle: &[[f32; 3]]) -> Result<PlanDocument> {
+/// `to` on are the old ones, and the patch with its two joins keeps ≥ radius from every obstacle point (with
+/// `whole`, the entire new path does). Returns the corrected document.
+fn check_correction(old: &PlanDocument, c: &CorrectionDoc, obstacle: &[[f32; 3]], whole: bool) -> Result<PlanDocument> {
     let new = c.apply(old).map_err(|e| anyhow!("{e}"))?;
     assert_eq!(new.version, old.version + 1);
     assert_eq!(&new.waypoints[..c.from], &old.waypoints[..c.from], "kept before the patch");
@@ -210,7 +114,12 @@ fn check_correction(old: &PlanDocument, c: &CorrectionDoc, obstacle: &[[f32; 3]]
     for (a, b) in new.waypoints[tail..].iter().zip(&old.waypoints[c.to..]) {
         assert_eq!((a.x, a.y), (b.x, b.y), "kept after the patch");
     }
-    let d = clearance(&new.waypoints, 0..new.waypoints.len(), obstacle);
+    let range = if whole {
+        0..new.waypoints.len()
+    } else {
+        c.from.saturating_sub(1)..(c.from + c.waypoints.len() + 1)
+    };
+    let d = clearance(&new.waypoints, range, obstacle);
     assert!(d >= RADIUS - 1e-6, "corrected path comes {d:.3} m from an obstacle point (radius {RADIUS})");
     for w in &c.waypoints {
         assert!(w.v.is_finite() && w.v > 0.0 && w.t.is_finite(), "re-profiled speeds and times: {w:?}");
@@ -221,15 +130,19 @@ fn check_correction(old: &PlanDocument, c: &CorrectionDoc, obstacle: &[[f32; 3]]
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn an_obstacle_ahead_gets_a_clear_correction_the_robot_can_fetch() -> Result<()> {
     let _ = tracing_subscriber::fmt()
-        .with_env_filter(tracing_subscriber::EnvFilter::new("warn,shiftd=info"))
+        .with_env_filter(tracing_subscriber::EnvFilter::new("warn,shiftd=debug"))
         .with_test_writer()
         .try_init();
     // An open 8 m × 4 m room.
-    let (server, robot, doc, id, _dir) = planned("room", grid(160, 80, &[]), [0.5, 0.5]).await?;
+    let (server, robot, doc, id, _dir) = planned("room", room_grid(160, 80, 0.05, &[]), [0.5, 0.5]).await?;
     let w = &doc.waypoints;
-    let seg = longest_segment(w);
-    assert!(seg_len(w, seg) > 4.0, "a lane long enough to drive along");
-    // The robot drives onto the lane: poses along its first metre.
+    let seg = longest_straight(w);
+    assert!(dist(w, seg.0, seg.1) > 4.0, "a lane long enough to drive along");
+    // The robot drives the plan up to the lane (progress follows it waypoint by waypoint), then onto the
+    // lane's first metre.
+    for k in (0..seg.0).step_by(4) {
+        robot.odom("r1", w[k].x, w[k].y, 0.0).await?;
+    }
     for k in 0..5 {
         let pose = along(w, seg, 0.2 * k as f64);
         robot.odom("r1", pose.0, pose.1, pose.2).await?;
@@ -249,23 +162,23 @@ async fn an_obstacle_ahead_gets_a_clear_correction_the_robot_can_fetch() -> Resu
             }
         }
     }
-    assert!(clearance(w, seg..seg + 1, &post) < RADIUS, "the old path runs into the post");
+    assert!(clearance(w, seg.0..seg.1, &post) < RADIUS, "the old path runs into the post");
     robot.cloud("r1", &post).await?;
 
-    let c = robot.next_correction().await?;
+    let c = robot.next_correction(LONG).await?;
     assert_eq!((c.plan_id.as_str(), c.robot.as_str()), (id.as_str(), "r1"));
     assert_eq!((c.base_version, c.version), (1, 2));
     assert_ne!(c.reason, CorrectionReason::Skipped, "an open room leaves room to pass: {c:?}");
-    assert!(c.from <= seg + 1 && c.to >= seg, "the patch is where the post is: {c:?}");
+    assert!(c.from > seg.0 && c.to <= seg.1, "the patch is on the lane with the post: {c:?}");
     assert!(c.compute_us > 0);
-    let new = check_correction(&doc, &c, &post)?;
-    // The patch joins the lane: its ends lie on the old segment's line.
+    let new = check_correction(&doc, &c, &post, true)?;
+    // The patch joins the lane: its ends lie on the old lane's line.
     for p in [&c.waypoints[0], &c.waypoints[c.waypoints.len() - 1]] {
-        let d = seg_dist((p.x, p.y), (w[seg].x, w[seg].y), (w[seg + 1].x, w[seg + 1].y));
+        let d = seg_dist((p.x, p.y), (w[seg.0].x, w[seg.0].y), (w[seg.1].x, w[seg.1].y));
         assert!(d < 1e-6, "patch end {p:?} is {d} m off the old lane");
     }
     // The robot's plan query and the API both give the corrected version.
-    let fetched = robot.query_plan("r1").await?;
+    let fetched = robot.query_plan("r1", LONG).await?;
     assert_eq!(fetched, new);
     let (_, served) = server.get(&format!("/v1/plans/{id}/path")).await?;
     assert_eq!(serde_json::from_value::<PlanDocument>(served)?, new);
@@ -281,14 +194,18 @@ async fn an_obstacle_ahead_gets_a_clear_correction_the_robot_can_fetch() -> Resu
 async fn a_closed_corridor_is_skipped_not_driven_through() -> Result<()> {
     // Two 3 m × 3 m rooms joined by a 0.6 m wide, 2 m long corridor (walls are 0.05 m cells).
     let blocked = [(3.0, 0.0, 5.0, 1.2), (3.0, 1.8, 5.0, 3.0)];
-    let (server, robot, doc, id, _dir) = planned("rooms", grid(160, 60, &blocked), [0.5, 0.5]).await?;
+    let (server, robot, doc, id, _dir) = planned("rooms", room_grid(160, 60, 0.05, &blocked), [0.5, 0.5]).await?;
     let w = &doc.waypoints;
     // Where the path first enters the corridor from the left room.
     let enter = (0..w.len() - 1)
         .find(|&i| w[i].x < 3.0 && w[i + 1].x > 3.0 && w[i].y > 1.2 && w[i].y < 1.8)
         .or_else(|| (0..w.len() - 1).find(|&i| w[i].x <= 3.0 && w[i + 1].x >= 3.2))
         .context("the plan crosses the corridor")?;
-    // The robot stands on that segment about 1.7 m before the wall (at x = 2.3, or the segment's start).
+    // The robot drives the plan up to there (progress follows it waypoint by waypoint), then stands on
+    // that segment about 1.7 m before the wall (at x = 2.3, or the segment's start).
+    for k in (0..enter).step_by(4) {
+        robot.odom("r1", w[k].x, w[k].y, 0.0).await?;
+    }
     let (a, b) = (&w[enter], &w[enter + 1]);
     let f = ((2.3 - a.x) / (b.x - a.x)).clamp(0.0, 1.0);
     let (px, py) = (a.x + f * (b.x - a.x), a.y + f * (b.y - a.y));
@@ -302,13 +219,14 @@ async fn a_closed_corridor_is_skipped_not_driven_through() -> Result<()> {
         .flat_map(|j| (0..3).map(move |k| [4.0, 1.2 + 0.025 * j as f32, 0.1 + 0.2 * k as f32]))
         .collect();
     robot.cloud("r1", &wall).await?;
-    let c = robot.next_correction().await?;
+    let c = robot.next_correction(LONG).await?;
     assert_eq!(c.reason, CorrectionReason::Skipped, "{c:?}");
     assert!(!c.skipped.is_empty(), "the left-out stretch is reported");
-    let new = check_correction(&doc, &c, &wall)?;
+    // Later passes through the corridor are corrected when the robot gets near them; this one is clear.
+    let new = check_correction(&doc, &c, &wall, false)?;
     let (_, st) = server.get(&format!("/v1/plans/{id}")).await?;
     assert!(st["missed"].as_array().is_some_and(|m| !m.is_empty()), "{st}");
-    let fetched = robot.query_plan("r1").await?;
+    let fetched = robot.query_plan("r1", LONG).await?;
     assert_eq!(fetched.version, new.version);
     robot.session.close().await.map_err(|e| anyhow!("{e}"))?;
     server.stop().await

@@ -134,7 +134,7 @@ pub fn spawn(
 ) -> std::io::Result<(BrainHandle, std::thread::JoinHandle<()>)> {
     let (tx, rx) = mpsc::channel(INBOX);
     let (running_tx, running_rx) = watch::channel(0);
-    let checks = CheckRunner::new(runtime.clone(), tx.clone(), live);
+    let checks = CheckRunner::new(runtime.clone(), tx.clone(), live.clone());
     let jobs = JobRunner::new(runtime, tx.clone());
     let brain = Brain {
         engine,
@@ -143,6 +143,7 @@ pub fn spawn(
         events,
         jobs,
         checks,
+        live,
         publisher,
         running: running_tx,
     };
@@ -165,6 +166,7 @@ struct Brain {
     events: broadcast::Sender<PlanEvent>,
     jobs: JobRunner,
     checks: CheckRunner,
+    live: Arc<LiveMaps>,
     publisher: Option<PlanPublisher>,
     running: watch::Sender<usize>,
 }
@@ -232,6 +234,7 @@ impl Brain {
                     None => tracing::warn!(robot, "zenoh is disabled: the plan is only served over HTTP"),
                 },
                 Command::RobotChanged(view) => self.views.set_robot(view),
+                Command::SiteStatic { site, clearance } => self.live.set_static(&site, clearance),
                 Command::StartCheck(job) => self.checks.start(*job),
                 Command::StoreCorrection {
                     record,

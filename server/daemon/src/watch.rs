@@ -66,7 +66,7 @@ impl CheckRunner {
                     );
                 }
                 CheckOutcome::Failed(why) => tracing::warn!(robot = job.robot, "path check failed: {why}"),
-                CheckOutcome::Clear => {}
+                CheckOutcome::Clear => tracing::debug!(robot = job.robot, compute_us, "path check: clear"),
             }
             // The engine must learn of every end (it keeps one check per robot in flight).
             let _ = to_engine.blocking_send(Msg::event(Event::CheckFinished {

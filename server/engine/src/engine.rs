@@ -151,6 +151,14 @@ pub enum Command {
     StoreSite(SiteRecord),
     /// The read model's site summary changed.
     SiteChanged(SiteSummary),
+    /// A site's static map is (now) this one: its clearance field tells the live map which points are known
+    /// obstacles seen again.
+    SiteStatic {
+        /// Site.
+        site: String,
+        /// Distance to the static map's non-free cells, metres.
+        clearance: Arc<shift_planner::map::DistanceField>,
+    },
     /// Persist a plan record (a status change) and update the read model.
     StorePlan(PlanRecord),
     /// Update the read model only (progress, not worth a disk write).
@@ -257,6 +265,10 @@ impl Engine {
                 let site = Site { record, map };
                 out.push(Command::StoreSite(site.record.clone()));
                 out.push(Command::SiteChanged(site.summary()));
+                out.push(Command::SiteStatic {
+                    site: site.record.site.clone(),
+                    clearance: site.map.clearance.clone(),
+                });
                 self.sites.insert(site.record.site.clone(), site);
             }
             Event::PlanRequested(request) => self.request(request, now_ms, &mut out)?,
@@ -672,6 +684,10 @@ impl Engine {
         for (record, map) in sites {
             let site = Site { record, map };
             out.push(Command::SiteChanged(site.summary()));
+            out.push(Command::SiteStatic {
+                site: site.record.site.clone(),
+                clearance: site.map.clearance.clone(),
+            });
             self.sites.insert(site.record.site.clone(), site);
         }
         let mut plans = plans;

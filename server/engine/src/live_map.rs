@@ -3,7 +3,10 @@
 //! horizon are deleted). Pure: the daemon decides when to call it and with what clock.
 
 use std::collections::HashMap;
+use std::sync::Arc;
 
+use shift_planner::geom::Point2;
+use shift_planner::map::DistanceField;
 use shift_planner::map::ikd_tree::{Aabb, IkdError, IkdParams, IkdTree, Point3};
 
 /// Knobs of a live map.
@@ -19,6 +22,10 @@ pub struct LiveMapParams {
     pub max_points: usize,
     /// Voxels not re-observed for this long are deleted, milliseconds.
     pub horizon_ms: u64,
+    /// Points within this distance of a non-free cell of the site's static map are that obstacle seen
+    /// again (walls, known furniture; the slack absorbs localisation error), not new obstacles: they are
+    /// not stored, metres. 0 keeps everything.
+    pub known_tolerance_m: f32,
 }
 
 impl Default for LiveMapParams {
@@ -29,6 +36,7 @@ impl Default for LiveMapParams {
             z_max_m: 2.0,
             max_points: 2_000_000,
             horizon_ms: 600_000,
+            known_tolerance_m: 0.1,
         }
     }
 }
@@ -40,6 +48,8 @@ pub struct IngestReport {
     pub offered: usize,
     /// Points outside the site box or the height band.
     pub filtered: usize,
+    /// Points on obstacles the static map already has (within `known_tolerance_m`).
+    pub known: usize,
     /// Points new to the tree after down-sampling.
     pub inserted: usize,
     /// Points refused because the tree is at its cap.
@@ -72,6 +82,7 @@ type VoxelKey = (i32, i32, i32);
 pub struct LiveMap {
     params: LiveMapParams,
     bounds: Aabb,
+    known: Option<Arc<DistanceField>>,
     tree: IkdTree,
     seen: HashMap<VoxelKey, u64>,
     stats: LiveMapStats,
@@ -91,6 +102,7 @@ impl LiveMap {
         Ok(Self {
             params,
             bounds,
+            known: None,
             tree,
             seen: HashMap::new(),
             stats: LiveMapStats::default(),
@@ -106,6 +118,12 @@ impl LiveMap {
         )
     }
 
+    /// Sets the static map's clearance field (distance to its non-free cells): points it explains are not
+    /// stored from now on (see [`LiveMapParams::known_tolerance_m`]). `None` stores every point.
+    pub fn set_static(&mut self, clearance: Option<Arc<DistanceField>>) {
+        self.known = clearance;
+    }
+
     /// Adds obstacle points given in the map frame, metres. `planar` (2-D scans) skips the height band.
     pub fn ingest(&mut self, points: &[[f64; 3]], planar: bool, now_ms: u64) -> IngestReport {
         let mut report = IngestReport {
@@ -116,10 +134,14 @@ impl LiveMap {
         for p in points {
             let q = Point3::new(p[0] as f32, p[1] as f32, p[2] as f32);
             let in_band = planar || (q.z >= self.params.z_min_m && q.z <= self.params.z_max_m);
-            if q.is_finite() && in_band && self.bounds.contains(&q) {
-                keep.push(q);
-            } else {
+            if !(q.is_finite() && in_band && self.bounds.contains(&q)) {
                 report.filtered += 1;
+            } else if self.known.as_ref().is_some_and(|f| {
+                f.at_point(Point2::new(p[0], p[1])) <= f64::from(self.params.known_tolerance_m)
+            }) {
+                report.known += 1;
+            } else {
+                keep.push(q);
             }
         }
         let room = self.params.max_points.saturating_sub(self.tree.len());
@@ -216,6 +238,21 @@ mod tests {
         m.ingest(&[[2.0, 2.0, 0.0]], true, 11);
         assert_eq!(m.tree().len(), 2);
         assert_eq!(m.stats().clouds, 2);
+    }
+
+    #[test]
+    fn points_on_static_obstacles_are_not_new() {
+        use shift_planner::map::{CellState, GridGeometry, OccupancyGrid};
+        let g = GridGeometry::new(100, 100, 0.1, Point2::new(0.0, 0.0)).expect("geometry");
+        let mut grid = OccupancyGrid::filled(g, CellState::Free);
+        grid.fill_rect(5.0, 0.0, 5.1, 10.0, CellState::Occupied); // a wall at x ∈ [5, 5.1]
+        let field = DistanceField::compute(g, |i| !grid.is_free(i), false);
+        let mut m = map();
+        m.set_static(Some(Arc::new(field)));
+        // On the wall, 5 cm off it (localisation error), and a new box 1 m away.
+        let r = m.ingest(&[[5.05, 3.0, 0.5], [4.97, 4.0, 0.5], [4.0, 3.0, 0.5]], false, 1);
+        assert_eq!((r.known, r.inserted), (2, 1), "{r:?}");
+        assert_eq!(m.tree().len(), 1);
     }
 
     #[test]

@@ -212,3 +212,128 @@ pub fn run_check(job: &CheckJob, live: Option<&IkdTree>) -> CheckOutcome {
         iterations: repair.iterations,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use shift_planner::map::ikd_tree::{IkdParams, Point3};
+    use shift_proto::{PlanMetricsDoc, WaypointKindDoc};
+
+    use super::*;
+    use crate::site::MapSource;
+
+    /// An open 8 m × 4 m room at 0.05 m with a wall ring.
+    fn room() -> SiteMap {
+        let (w, h) = (160usize, 80usize);
+        let cells: Vec<String> = (0..w * h)
+            .map(|i| {
+                let (r, c) = (i / w, i % w);
+                if r == 0 || c == 0 || r + 1 == h || c + 1 == w { "100" } else { "0" }.to_owned()
+            })
+            .collect();
+        let text = format!(
+            r#"{{"resolution": 0.05, "origin": [0, 0], "width": {w}, "height": {h}, "cells": [{}]}}"#,
+            cells.join(",")
+        );
+        MapSource::Json { text }.parse().expect("valid map")
+    }
+
+    /// A lane along y = 2 from x = 0.5 to 7.5, sampled every 0.075 m as plan documents are.
+    fn lane() -> Arc<PlanDocument> {
+        let n = (7.0f64 / 0.075) as usize;
+        Arc::new(PlanDocument {
+            plan_id: "p-1".into(),
+            version: 1,
+            frame: "map".into(),
+            waypoints: (0..=n)
+                .map(|i| WaypointDoc {
+                    x: 0.5 + i as f64 * 0.075,
+                    y: 2.0,
+                    z: 0.0,
+                    v: 0.5,
+                    t: i as f64 * 0.15,
+                    kind: WaypointKindDoc::Cover,
+                    region: Some(0),
+                })
+                .collect(),
+            regions: vec![],
+            metrics: PlanMetricsDoc::default(),
+        })
+    }
+
+    fn job(doc: Arc<PlanDocument>, x: f64) -> CheckJob {
+        CheckJob {
+            robot: "r1".into(),
+            plan_id: "p-1".into(),
+            site: "s".into(),
+            ahead_from: ((x - 0.5) / 0.075) as usize,
+            doc,
+            pose: Pose2 {
+                x,
+                y: 2.0,
+                yaw: 0.0,
+                stamp_ns: 0,
+            },
+            map: room(),
+            params: WatchParams::default().correct_params(0.15),
+            limits: PatchLimits {
+                v_min_mps: 0.1,
+                v_max_mps: 1.0,
+                a_max_mps2: 0.5,
+            },
+            trigger: Trigger::MapChange,
+        }
+    }
+
+    fn post(cx: f64, cy: f64) -> IkdTree {
+        let mut pts = Vec::new();
+        for i in 0..5 {
+            for j in 0..5 {
+                pts.push(Point3::new((cx - 0.1 + 0.05 * i as f64) as f32, (cy - 0.1 + 0.05 * j as f64) as f32, 0.0));
+            }
+        }
+        let mut t = IkdTree::new(IkdParams::default()).expect("params");
+        t.build(&pts);
+        t
+    }
+
+    #[test]
+    fn a_clear_lane_stays_clear_and_a_post_on_it_is_corrected_around() {
+        let doc = lane();
+        let j = job(doc.clone(), 1.3);
+        assert_eq!(run_check(&j, None), CheckOutcome::Clear);
+        let tree = post(3.3, 2.0);
+        let CheckOutcome::Correct(p) = run_check(&j, Some(&tree)) else {
+            panic!("a post 2 m ahead on the lane must be corrected");
+        };
+        assert_eq!(p.reason, CorrectionReason::Obstacle);
+        let c = shift_proto::CorrectionDoc {
+            plan_id: "p-1".into(),
+            robot: "r1".into(),
+            base_version: 1,
+            version: 2,
+            from: p.from,
+            to: p.to,
+            waypoints: p.waypoints.clone(),
+            reason: p.reason,
+            dt_after_s: p.dt_after_s,
+            skipped: p.skipped.clone(),
+            compute_us: 0,
+        };
+        let new = c.apply(&doc).expect("applies");
+        let flat = tree.flatten();
+        for s in new.waypoints.windows(2) {
+            for q in &flat {
+                let d = shift_planner::geom::point_segment_distance(
+                    Point2::new(f64::from(q.x), f64::from(q.y)),
+                    Point2::new(s[0].x, s[0].y),
+                    Point2::new(s[1].x, s[1].y),
+                );
+                assert!(d >= 0.15 - 1e-9, "corrected path {d} m from a post point");
+            }
+        }
+        assert!(p.dt_after_s > 0.0, "the detour takes longer");
+        // A post behind the robot is none of its business.
+        let behind = post(0.6, 2.0);
+        assert_eq!(run_check(&job(doc, 2.5), Some(&behind)), CheckOutcome::Clear);
+    }
+}

@@ -35,6 +35,9 @@ pub struct ZenohConfig {
     pub horizon_s: u64,
     /// Clouds waiting per robot; when full the oldest is dropped and counted.
     pub cloud_queue: usize,
+    /// Points this close to an obstacle of the static map are that obstacle seen again, not new ones
+    /// (metres; 0 keeps them all).
+    pub known_tolerance_m: f64,
 }
 
 impl Default for ZenohConfig {
@@ -54,6 +57,7 @@ impl Default for ZenohConfig {
             max_points: 2_000_000,
             horizon_s: 600,
             cloud_queue: 4,
+            known_tolerance_m: 0.1,
         }
     }
 }

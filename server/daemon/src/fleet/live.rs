@@ -6,6 +6,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, RwLock};
 
 use shift_engine::{LiveMap, LiveMapParams};
+use shift_planner::map::DistanceField;
 use shift_proto::SiteSummary;
 
 /// One site's live map.
@@ -50,12 +51,26 @@ impl SiteLive {
 #[derive(Debug, Default)]
 pub struct LiveMaps {
     sites: RwLock<HashMap<String, Arc<SiteLive>>>,
+    /// Each site's static clearance field, so live maps skip points the static map explains.
+    statics: RwLock<HashMap<String, Arc<DistanceField>>>,
 }
 
 impl LiveMaps {
     /// The site's live map, if it has one.
     pub fn get(&self, site: &str) -> Option<Arc<SiteLive>> {
         self.sites.read().ok()?.get(site).cloned()
+    }
+
+    /// Sets a site's static map (at upload and restore); its live map, if any, uses it from now on.
+    pub fn set_static(&self, site: &str, clearance: Arc<DistanceField>) {
+        if let Ok(mut statics) = self.statics.write() {
+            statics.insert(site.to_owned(), clearance.clone());
+        }
+        if let Some(live) = self.get(site)
+            && let Ok(mut map) = live.map.write()
+        {
+            map.set_static(Some(clearance));
+        }
     }
 
     /// The site's live map, created for `summary`'s extent when missing.
@@ -66,7 +81,8 @@ impl LiveMaps {
         let (x0, y0) = (summary.origin[0], summary.origin[1]);
         let x1 = x0 + summary.width as f64 * summary.resolution;
         let y1 = y0 + summary.height as f64 * summary.resolution;
-        let map = LiveMap::new(params, x0, y0, x1, y1).ok()?;
+        let mut map = LiveMap::new(params, x0, y0, x1, y1).ok()?;
+        map.set_static(self.statics.read().ok()?.get(&summary.site).cloned());
         let live = Arc::new(SiteLive {
             map: RwLock::new(map),
             recent_ms: Mutex::new(VecDeque::new()),

@@ -163,6 +163,7 @@ impl Fleet {
             z_max_m: config.obstacle_z_max_m as f32,
             max_points: config.max_points,
             horizon_ms: config.horizon_s.saturating_mul(1000),
+            known_tolerance_m: config.known_tolerance_m as f32,
         };
         let ingest = Arc::new(Ingest::new(
             config.cloud_queue,

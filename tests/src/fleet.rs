@@ -1,0 +1,127 @@
+//! Fleet-side helpers for end-to-end tests and loopback benches: a robot's Zenoh session (peer, loopback
+//! only, no scouting), free ports, and small occupancy maps as JSON grids.
+
+use std::time::Duration;
+
+use anyhow::{Context, Result, anyhow};
+use serde_json::{Value, json};
+use shift_proto::ros::point_cloud2::encode_point_cloud2_xyz;
+use shift_proto::ros::{Header, Time};
+use shift_proto::{CorrectionDoc, PlanDocument};
+use zenoh::bytes::Encoding;
+
+/// A free TCP port on 127.0.0.1 (for the daemon's Zenoh listener).
+pub fn free_port() -> Result<u16> {
+    Ok(std::net::TcpListener::bind("127.0.0.1:0")?.local_addr()?.port())
+}
+
+/// A robot's Zenoh session: a peer that connects to `endpoint` only (no listening, no scouting).
+pub async fn robot_session(endpoint: &str) -> Result<zenoh::Session> {
+    let mut c = zenoh::Config::default();
+    let set = |c: &mut zenoh::Config, k: &str, v: &str| c.insert_json5(k, v).map_err(|e| anyhow!("{k}: {e}"));
+    set(&mut c, "mode", "\"peer\"")?;
+    set(&mut c, "listen/endpoints", "[]")?;
+    set(&mut c, "connect/endpoints", &format!("[\"{endpoint}\"]"))?;
+    set(&mut c, "scouting/multicast/enabled", "false")?;
+    set(&mut c, "scouting/gossip/enabled", "false")?;
+    zenoh::open(c).await.map_err(|e| anyhow!("robot session: {e}"))
+}
+
+/// A JSON grid map (DESIGN §5.3) of `w × h` cells of `res` metres from the origin, free inside a one-cell wall
+/// ring, with the rectangles `(x0, y0, x1, y1)` (metres) occupied.
+pub fn room_grid(w: usize, h: usize, res: f64, blocked: &[(f64, f64, f64, f64)]) -> Value {
+    let mut cells = vec![0i32; w * h];
+    for r in 0..h {
+        for c in 0..w {
+            let (x, y) = ((c as f64 + 0.5) * res, (r as f64 + 0.5) * res);
+            let wall = r == 0 || c == 0 || r + 1 == h || c + 1 == w;
+            let inside = blocked
+                .iter()
+                .any(|&(x0, y0, x1, y1)| x >= x0 && x <= x1 && y >= y0 && y <= y1);
+            if wall || inside {
+                cells[r * w + c] = 100;
+            }
+        }
+    }
+    json!({"resolution": res, "origin": [0.0, 0.0], "width": w, "height": h, "cells": cells})
+}
+
+/// A scripted robot: a Zenoh session with a liveliness token and a subscription to its corrections.
+pub struct ScriptedRobot {
+    /// Its session.
+    pub session: zenoh::Session,
+    _token: zenoh::liveliness::LivelinessToken,
+    /// Corrections sent to it.
+    pub corrections: zenoh::pubsub::Subscriber<zenoh::handlers::FifoChannelHandler<zenoh::sample::Sample>>,
+}
+
+impl ScriptedRobot {
+    /// Connects to `endpoint`, announces itself as `name` and subscribes to its corrections.
+    pub async fn join(endpoint: &str, name: &str) -> Result<Self> {
+        let session = robot_session(endpoint).await?;
+        let token = session
+            .liveliness()
+            .declare_token(format!("shift/default/robots/{name}/alive"))
+            .await
+            .map_err(|e| anyhow!("{e}"))?;
+        let corrections = session
+            .declare_subscriber(format!("shift/default/robots/{name}/corrections"))
+            .await
+            .map_err(|e| anyhow!("{e}"))?;
+        Ok(Self {
+            session,
+            _token: token,
+            corrections,
+        })
+    }
+
+    /// Publishes JSON odometry (map frame).
+    pub async fn odom(&self, name: &str, x: f64, y: f64, yaw: f64) -> Result<()> {
+        let body = json!({"x": x, "y": y, "yaw": yaw, "vx": 0.3, "vy": 0.0, "wz": 0.0, "stamp": 1.0});
+        self.session
+            .put(format!("shift/default/robots/{name}/odom"), serde_json::to_vec(&body)?)
+            .encoding(Encoding::APPLICATION_JSON)
+            .await
+            .map_err(|e| anyhow!("{e}"))
+    }
+
+    /// Publishes a PointCloud2 (CDR) of map-frame points.
+    pub async fn cloud(&self, name: &str, pts: &[[f32; 3]]) -> Result<()> {
+        let header = Header {
+            stamp: Time { sec: 2, nanosec: 0 },
+            frame_id: "map".into(),
+        };
+        self.session
+            .put(
+                format!("shift/default/robots/{name}/cloud"),
+                encode_point_cloud2_xyz(&header, pts),
+            )
+            .encoding(Encoding::APPLICATION_CDR)
+            .await
+            .map_err(|e| anyhow!("{e}"))
+    }
+
+    /// Waits up to `timeout` for the next correction.
+    pub async fn next_correction(&self, timeout: Duration) -> Result<CorrectionDoc> {
+        let sample = tokio::time::timeout(timeout, self.corrections.recv_async())
+            .await
+            .context("no correction arrived")?
+            .map_err(|e| anyhow!("{e}"))?;
+        Ok(serde_json::from_slice(&sample.payload().to_bytes())?)
+    }
+
+    /// Fetches its current plan from the daemon's queryable (what a robot that reconnects does).
+    pub async fn query_plan(&self, name: &str, timeout: Duration) -> Result<PlanDocument> {
+        let replies = self
+            .session
+            .get(format!("shift/default/robots/{name}/plan"))
+            .await
+            .map_err(|e| anyhow!("{e}"))?;
+        let reply = tokio::time::timeout(timeout, replies.recv_async())
+            .await?
+            .map_err(|e| anyhow!("{e}"))?;
+        let sample = reply.result().map_err(|e| anyhow!("query error {e:?}"))?;
+        Ok(serde_json::from_slice(&sample.payload().to_bytes())?)
+    }
+}
+
