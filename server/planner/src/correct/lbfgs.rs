@@ -30,8 +30,8 @@ pub(crate) struct Minimum {
 }
 
 /// Minimises `obj` from `x0` for at most `max_iterations` accepted steps. Monotone: f never increases, so
-/// the result's f ≤ f(x0). Stops when the gradient's largest component falls below `g_tol`, when a step
-/// decreases f by less than `f_rel_tol` relative, or when the line search finds no decrease.
+/// the result's f ≤ f(x0). Stops when the gradient's largest component falls below `g_tol`, when two
+/// steps in a row decrease f by less than `f_rel_tol` relative, or when the line search finds no decrease.
 pub(crate) fn minimize(
     obj: &mut impl Objective,
     x0: &[f64],
@@ -57,6 +57,7 @@ pub(crate) fn minimize(
     let mut d = vec![0.0; n];
     let mut x_new = vec![0.0; n];
     let mut g_new = vec![0.0; n];
+    let mut small_steps = 0;
     while iterations < max_iterations {
         if g.iter().fold(0.0f64, |a, v| a.max(v.abs())) < g_tol {
             break;
@@ -125,7 +126,12 @@ pub(crate) fn minimize(
         std::mem::swap(&mut g, &mut g_new);
         f = f_new;
         if decrease <= f_rel_tol * f.abs().max(1e-12) {
-            break;
+            small_steps += 1;
+            if small_steps >= 2 {
+                break;
+            }
+        } else {
+            small_steps = 0;
         }
     }
     Minimum { x, f, iterations }
