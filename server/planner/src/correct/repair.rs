@@ -155,6 +155,45 @@ impl Repairer<'_, '_> {
         s
     }
 
+    /// The least sideways offset (metres, to one side for the whole stretch) that takes the points of the
+    /// path between arc lengths ca and cb clear of d_safe: min over both sides of the max over the points of
+    /// the sphere-traced offset along the path normal. Capped at half the longest window.
+    fn lateral_need(&self, ca: f64, cb: f64) -> f64 {
+        let p = self.p;
+        let cap = 0.5 * p.max_window_m;
+        let target = p.d_safe() + 0.5 * p.margin_m;
+        let step = (0.5 * self.world.resolution()).max(0.5 * p.margin_m);
+        let n = (((cb - ca) / p.spacing_m).ceil() as usize).max(1);
+        let mut need = [0.0f64; 2];
+        for j in 0..=n {
+            let s = ca + (cb - ca) * j as f64 / n as f64;
+            let pos = self.arc.pos_at(s);
+            let (a, b) = (
+                self.arc.path[pos.seg],
+                self.arc.path[(pos.seg + 1).min(self.arc.path.len() - 1)],
+            );
+            let d = b - a;
+            let len = d.norm();
+            if len <= 0.0 {
+                continue;
+            }
+            let normal = nalgebra::Vector2::new(-d.y, d.x) / len;
+            let q = self.arc.point(pos);
+            for (k, side) in [1.0, -1.0].into_iter().enumerate() {
+                let mut o = 0.0;
+                loop {
+                    let c = self.world.clearance_fast(q + normal * (side * o));
+                    if c >= target || o > cap {
+                        break;
+                    }
+                    o += (target - c).max(step);
+                }
+                need[k] = need[k].max(o.min(cap));
+            }
+        }
+        need[0].min(need[1])
+    }
+
     /// The windows to try, longest last, and the end of the non-compliant core.
     fn windows(&self, s_a: f64, s_b: f64) -> Result<Plan, CorrectError> {
         let p = self.p;
@@ -163,7 +202,12 @@ impl Repairer<'_, '_> {
         let ca = self.to_compliant(s_a, -1.0, self.s_e, s_a);
         let cb = self.to_compliant(s_b, 1.0, s_b, (s_b + p.max_window_m).min(total));
         let core = cb - ca;
-        let base = (3.0 * p.d_safe()).max(1.0).max(4.0 * p.spacing_m);
+        // Adaptive start: the patch leaves the path at about 45° (the lateral starts' tent), so the window
+        // must extend past the core by at least the sideways distance that clears it.
+        let base = (3.0 * p.d_safe())
+            .max(1.0)
+            .max(4.0 * p.spacing_m)
+            .max(1.25 * self.lateral_need(ca, cb) + p.spacing_m);
         let mut exts = vec![base];
         while core + 2.0 * exts[exts.len() - 1] * 1.6 < p.max_window_m {
             let e = exts[exts.len() - 1] * 1.6;
@@ -384,4 +428,31 @@ fn bbox(points: &[Point2]) -> (Point2, Point2) {
         hi = Point2::new(hi.x.max(q.x), hi.y.max(q.y));
     }
     (lo, hi)
+}
+
+/// Test hook: the windows of a repair and what optimising each gave (s0, s1, iterations, feasible).
+#[cfg(test)]
+pub(crate) fn trace_windows(
+    path: &[Point2],
+    breach: &Breach,
+    world: &World<'_>,
+    p: &CorrectParams,
+) -> Vec<(f64, f64, u32, bool, f64, f64)> {
+    let Ok((r, s_a, s_b)) = prepare(path, breach, world, p) else {
+        return Vec::new();
+    };
+    let Ok(plan) = r.windows(s_a, s_b) else {
+        return Vec::new();
+    };
+    plan.usable
+        .iter()
+        .map(|win| {
+            let (lo, hi) = bbox(&win.with_free(&win.free));
+            let reach = 0.5 * (win.s1 - win.s0) + p.d_safe() + p.margin_m;
+            let pad = Point2::new(reach, reach).coords;
+            let local = LocalObstacles::new(world, lo - pad, hi + pad, p.d_safe() + p.margin_m);
+            let o = optimise_window(win, &local, world, p);
+            (win.s0, win.s1, o.iterations, o.feasible, o.cost_before, o.cost_after)
+        })
+        .collect()
 }
