@@ -163,7 +163,8 @@ impl Repairer<'_, '_> {
         let cap = 0.5 * p.max_window_m;
         let target = p.d_safe() + 0.5 * p.margin_m;
         let step = (0.5 * self.world.resolution()).max(0.5 * p.margin_m);
-        let n = (((cb - ca) / p.spacing_m).ceil() as usize).max(1);
+        // A heuristic for the window's size: points a quarter metre apart are enough.
+        let n = (((cb - ca) / p.spacing_m.max(0.25)).ceil() as usize).max(1);
         let mut need = [0.0f64; 2];
         for j in 0..=n {
             let s = ca + (cb - ca) * j as f64 / n as f64;
@@ -441,17 +442,39 @@ pub(crate) fn trace_windows(
     let Ok((r, s_a, s_b)) = prepare(path, breach, world, p) else {
         return Vec::new();
     };
+    let t = std::time::Instant::now();
     let Ok(plan) = r.windows(s_a, s_b) else {
         return Vec::new();
     };
+    println!("    windows() {:?}", t.elapsed());
     plan.usable
         .iter()
         .map(|win| {
+            let t = std::time::Instant::now();
             let (lo, hi) = bbox(&win.with_free(&win.free));
             let reach = 0.5 * (win.s1 - win.s0) + p.d_safe() + p.margin_m;
             let pad = Point2::new(reach, reach).coords;
             let local = LocalObstacles::new(world, lo - pad, hi + pad, p.d_safe() + p.margin_m);
+            println!("    local cache {:?}", t.elapsed());
+            let t = std::time::Instant::now();
             let o = optimise_window(win, &local, world, p);
+            println!("    optimise_window {:?}", t.elapsed());
+            let t = std::time::Instant::now();
+            let _ = verify(&o.points, world, p.robot_radius_m);
+            println!("    verify {:?}", t.elapsed());
+            let t = std::time::Instant::now();
+            let mut cost = super::cost::WindowCost::new(win.head, win.tail, weights(p, win.h), &local, win.free.len());
+            let x: Vec<f64> = win.free.iter().flat_map(|q| [q.x, q.y]).collect();
+            for _ in 0..100 {
+                let _ = cost.value(&x);
+            }
+            println!("    eval (local) x100 {:?}", t.elapsed());
+            let t = std::time::Instant::now();
+            let mut cost = super::cost::WindowCost::new(win.head, win.tail, weights(p, win.h), world, win.free.len());
+            for _ in 0..100 {
+                let _ = cost.value(&x);
+            }
+            println!("    eval (world) x100 {:?}", t.elapsed());
             (win.s0, win.s1, o.iterations, o.feasible, o.cost_before, o.cost_after)
         })
         .collect()
