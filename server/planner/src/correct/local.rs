@@ -144,8 +144,16 @@ impl<'a, 'w> LocalObstacles<'a, 'w> {
         let rings = (self.radius / b).ceil() as isize + 1;
         let mut best = (Point2::origin(), self.radius * self.radius);
         let mut found = false;
+        let (ox, oy) = (self.origin.x, self.origin.y);
         let mut visit = |bx: isize, by: isize, best: &mut (Point2, f64)| {
             if bx < 0 || bx >= nx {
+                return;
+            }
+            // Skip a bucket that cannot hold anything nearer than the best so far.
+            let (xlo, ylo) = (ox + bx as f64 * b, oy + by as f64 * b);
+            let dx = (xlo - p.x).max(p.x - xlo - b).max(0.0);
+            let dy = (ylo - p.y).max(p.y - ylo - b).max(0.0);
+            if dx * dx + dy * dy >= best.1 {
                 return;
             }
             let cell = (by * nx + bx) as usize;
