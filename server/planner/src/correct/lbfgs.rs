@@ -77,14 +77,14 @@ pub(crate) fn minimize(
         }
         d.iter_mut().for_each(|v| *v = -*v);
         let mut slope = dot(&g, &d);
-        if !(slope < 0.0) {
+        if slope.is_nan() || slope >= 0.0 {
             // Not a descent direction (memory gone stale): restart from the preconditioned gradient.
             stored = 0;
             d.copy_from_slice(&g);
             obj.precondition(&mut d);
             d.iter_mut().for_each(|v| *v = -*v);
             slope = dot(&g, &d);
-            if !(slope < 0.0) {
+            if slope.is_nan() || slope >= 0.0 {
                 break;
             }
         }
@@ -192,7 +192,7 @@ impl BandChol {
                     sum -= self.a[i * w + (i - m)] * self.a[j * w + (j - m)];
                 }
                 if k == 0 {
-                    if !(sum > 0.0) {
+                    if sum.is_nan() || sum <= 0.0 {
                         return false;
                     }
                     self.a[i * w] = sum.sqrt();

@@ -49,7 +49,7 @@ impl Window {
     /// The window `[s0, s1]` of `arc` resampled at about `spacing` metres (at least one free point).
     pub(crate) fn new(arc: &Arclen<'_>, s0: f64, s1: f64, spacing: f64) -> Option<Self> {
         let len = s1 - s0;
-        if !(len > 0.0) || arc.segments() == 0 {
+        if len.is_nan() || len <= 0.0 || arc.segments() == 0 {
             return None;
         }
         let m = ((len / spacing).ceil() as usize).max(4);

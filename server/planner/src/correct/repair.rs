@@ -74,7 +74,7 @@ fn prepare<'a, 'w>(
         return Err(CorrectError::BadPath(format!("waypoint {i} is not finite")));
     }
     let arc = Arclen::new(path);
-    if !(arc.total() > 0.0) {
+    if arc.total().is_nan() || arc.total() <= 0.0 {
         return Err(CorrectError::BadPath("the path has zero length".into()));
     }
     for (name, pos) in [
