@@ -30,8 +30,8 @@ pub(crate) struct Minimum {
 }
 
 /// Minimises `obj` from `x0` for at most `max_iterations` accepted steps. Monotone: f never increases, so
-/// the result's f ≤ f(x0). Stops when the gradient's largest component falls below `g_tol`, when a step
-/// decreases f by less than `f_rel_tol` relative, or when the line search finds no decrease.
+/// the result's f ≤ f(x0). Stops when the gradient's largest component falls below `g_tol`, when two
+/// steps in a row decrease f by less than `f_rel_tol` relative, or when the line search finds no decrease.
 pub(crate) fn minimize(
     obj: &mut impl Objective,
     x0: &[f64],
@@ -57,6 +57,7 @@ pub(crate) fn minimize(
     let mut d = vec![0.0; n];
     let mut x_new = vec![0.0; n];
     let mut g_new = vec![0.0; n];
+    let mut small_steps = 0;
     while iterations < max_iterations {
         if g.iter().fold(0.0f64, |a, v| a.max(v.abs())) < g_tol {
             break;
@@ -76,14 +77,14 @@ pub(crate) fn minimize(
         }
         d.iter_mut().for_each(|v| *v = -*v);
         let mut slope = dot(&g, &d);
-        if !(slope < 0.0) {
+        if slope.is_nan() || slope >= 0.0 {
             // Not a descent direction (memory gone stale): restart from the preconditioned gradient.
             stored = 0;
             d.copy_from_slice(&g);
             obj.precondition(&mut d);
             d.iter_mut().for_each(|v| *v = -*v);
             slope = dot(&g, &d);
-            if !(slope < 0.0) {
+            if slope.is_nan() || slope >= 0.0 {
                 break;
             }
         }
@@ -125,7 +126,12 @@ pub(crate) fn minimize(
         std::mem::swap(&mut g, &mut g_new);
         f = f_new;
         if decrease <= f_rel_tol * f.abs().max(1e-12) {
-            break;
+            small_steps += 1;
+            if small_steps >= 2 {
+                break;
+            }
+        } else {
+            small_steps = 0;
         }
     }
     Minimum { x, f, iterations }
@@ -186,7 +192,7 @@ impl BandChol {
                     sum -= self.a[i * w + (i - m)] * self.a[j * w + (j - m)];
                 }
                 if k == 0 {
-                    if !(sum > 0.0) {
+                    if sum.is_nan() || sum <= 0.0 {
                         return false;
                     }
                     self.a[i * w] = sum.sqrt();

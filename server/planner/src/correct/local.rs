@@ -25,6 +25,11 @@ pub(crate) struct LocalObstacles<'a, 'w> {
     /// Bucket b holds `pts[start[b]..start[b + 1]]`.
     start: Vec<u32>,
     pts: Vec<Point2>,
+    /// Coarse cells of four buckets a side: whether any point lies in them (a query far from every point
+    /// checks 3 × 3 of these and stops).
+    coarse: Vec<bool>,
+    cnx: usize,
+    cny: usize,
     radius: f64,
     band: f64,
 }
@@ -32,7 +37,7 @@ pub(crate) struct LocalObstacles<'a, 'w> {
 impl<'a, 'w> LocalObstacles<'a, 'w> {
     /// The cache for queries in the box `[lo, hi]` (map frame, metres) that need obstacles within `radius`.
     pub(crate) fn new(world: &'a World<'w>, lo: Point2, hi: Point2, radius: f64) -> Self {
-        let bucket = (0.5 * radius).max(world.resolution());
+        let bucket = (0.25 * radius).max(world.resolution());
         let origin = Point2::new(lo.x - radius, lo.y - radius);
         let top = Point2::new(hi.x + radius, hi.y + radius);
         let nx = (((top.x - origin.x) / bucket).ceil() as usize).clamp(1, 4096);
@@ -60,6 +65,15 @@ impl<'a, 'w> LocalObstacles<'a, 'w> {
         }
         for b in 1..count.len() {
             count[b] += count[b - 1];
+        }
+        let (cnx, cny) = (nx.div_ceil(4), ny.div_ceil(4));
+        let mut coarse = vec![false; cnx * cny];
+        for by in 0..ny {
+            for bx in 0..nx {
+                if count[by * nx + bx + 1] > count[by * nx + bx] {
+                    coarse[(by / 4) * cnx + bx / 4] = true;
+                }
+            }
         }
         let mut fill = count.clone();
         let mut pts = vec![Point2::origin(); raw.len()];
@@ -89,30 +103,88 @@ impl<'a, 'w> LocalObstacles<'a, 'w> {
             ny,
             start: count,
             pts,
+            coarse,
+            cnx,
+            cny,
             radius,
             band: std::f64::consts::SQRT_2 * world.resolution(),
         }
     }
 
+    /// Bucket coordinate of `v` metres from the origin (clamped to the grid).
+    #[inline]
+    fn coord(&self, v: f64, n: usize) -> usize {
+        let q = v / self.bucket;
+        // floor without a libm call (baseline x86-64 has no rounding instruction).
+        let t = q as i64;
+        let f = if (t as f64) > q { t - 1 } else { t };
+        f.clamp(0, n as i64 - 1) as usize
+    }
+
+    /// The nearest live point within the radius: buckets in rings of growing Chebyshev distance around the
+    /// query's own, stopping when a ring cannot hold anything nearer than the best so far (every bucket of
+    /// ring k is at least (k − 1) bucket sides from the query).
     fn live_within(&self, p: Point2) -> Option<(Point2, f64)> {
-        let r = self.radius;
         let b = self.bucket;
-        let x0 = ((p.x - r - self.origin.x) / b).floor().max(0.0) as usize;
-        let y0 = ((p.y - r - self.origin.y) / b).floor().max(0.0) as usize;
-        let x1 = (((p.x + r - self.origin.x) / b).floor().max(0.0) as usize).min(self.nx - 1);
-        let y1 = (((p.y + r - self.origin.y) / b).floor().max(0.0) as usize).min(self.ny - 1);
-        let mut best = (Point2::origin(), r * r);
+        let cx = self.coord(p.x - self.origin.x, self.nx) as isize;
+        let cy = self.coord(p.y - self.origin.y, self.ny) as isize;
+        let (nx, ny) = (self.nx as isize, self.ny as isize);
+        // Every point within the radius (≤ 4 buckets) lies in the 3 × 3 coarse cells around the query's.
+        let (ccx, ccy) = (cx / 4, cy / 4);
+        let (cnx, cny) = (self.cnx as isize, self.cny as isize);
+        let mut any = false;
+        for y in (ccy - 1).max(0)..=(ccy + 1).min(cny - 1) {
+            for x in (ccx - 1).max(0)..=(ccx + 1).min(cnx - 1) {
+                any |= self.coarse[(y * cnx + x) as usize];
+            }
+        }
+        if !any {
+            return None;
+        }
+        let rings = (self.radius / b).ceil() as isize + 1;
+        let mut best = (Point2::origin(), self.radius * self.radius);
         let mut found = false;
-        for by in y0..=y1 {
-            let row = by * self.nx;
-            for bx in x0..=x1 {
-                let (s, e) = (self.start[row + bx] as usize, self.start[row + bx + 1] as usize);
-                for q in &self.pts[s..e] {
-                    let d2 = (q - p).norm_squared();
-                    if d2 < best.1 {
-                        best = (*q, d2);
-                        found = true;
+        let (ox, oy) = (self.origin.x, self.origin.y);
+        let mut visit = |bx: isize, by: isize, best: &mut (Point2, f64)| {
+            if bx < 0 || bx >= nx {
+                return;
+            }
+            // Skip a bucket that cannot hold anything nearer than the best so far.
+            let (xlo, ylo) = (ox + bx as f64 * b, oy + by as f64 * b);
+            let dx = (xlo - p.x).max(p.x - xlo - b).max(0.0);
+            let dy = (ylo - p.y).max(p.y - ylo - b).max(0.0);
+            if dx * dx + dy * dy >= best.1 {
+                return;
+            }
+            let cell = (by * nx + bx) as usize;
+            let (s, e) = (self.start[cell] as usize, self.start[cell + 1] as usize);
+            for q in &self.pts[s..e] {
+                let d2 = (q - p).norm_squared();
+                if d2 < best.1 {
+                    *best = (*q, d2);
+                    found = true;
+                }
+            }
+        };
+        for k in 0..=rings {
+            if k >= 2 {
+                let gap = (k - 1) as f64 * b;
+                if gap * gap >= best.1 {
+                    break;
+                }
+            }
+            for dy in -k..=k {
+                let by = cy + dy;
+                if by < 0 || by >= ny {
+                    continue;
+                }
+                if dy.abs() == k {
+                    for dx in -k..=k {
+                        visit(cx + dx, by, &mut best);
                     }
+                } else {
+                    visit(cx - k, by, &mut best);
+                    visit(cx + k, by, &mut best);
                 }
             }
         }

@@ -74,7 +74,7 @@ fn prepare<'a, 'w>(
         return Err(CorrectError::BadPath(format!("waypoint {i} is not finite")));
     }
     let arc = Arclen::new(path);
-    if !(arc.total() > 0.0) {
+    if arc.total().is_nan() || arc.total() <= 0.0 {
         return Err(CorrectError::BadPath("the path has zero length".into()));
     }
     for (name, pos) in [
@@ -155,6 +155,46 @@ impl Repairer<'_, '_> {
         s
     }
 
+    /// The least sideways offset (metres, to one side for the whole stretch) that takes the points of the
+    /// path between arc lengths ca and cb clear of d_safe: min over both sides of the max over the points of
+    /// the sphere-traced offset along the path normal. Capped at half the longest window.
+    fn lateral_need(&self, ca: f64, cb: f64) -> f64 {
+        let p = self.p;
+        let cap = 0.5 * p.max_window_m;
+        let target = p.d_safe() + 0.5 * p.margin_m;
+        let step = (0.5 * self.world.resolution()).max(0.5 * p.margin_m);
+        // A heuristic for the window's size: points a quarter metre apart are enough.
+        let n = (((cb - ca) / p.spacing_m.max(0.25)).ceil() as usize).max(1);
+        let mut need = [0.0f64; 2];
+        for j in 0..=n {
+            let s = ca + (cb - ca) * j as f64 / n as f64;
+            let pos = self.arc.pos_at(s);
+            let (a, b) = (
+                self.arc.path[pos.seg],
+                self.arc.path[(pos.seg + 1).min(self.arc.path.len() - 1)],
+            );
+            let d = b - a;
+            let len = d.norm();
+            if len <= 0.0 {
+                continue;
+            }
+            let normal = nalgebra::Vector2::new(-d.y, d.x) / len;
+            let q = self.arc.point(pos);
+            for (k, side) in [1.0, -1.0].into_iter().enumerate() {
+                let mut o = 0.0;
+                loop {
+                    let c = self.world.clearance_fast(q + normal * (side * o));
+                    if c >= target || o > cap {
+                        break;
+                    }
+                    o += (target - c).max(step);
+                }
+                need[k] = need[k].max(o.min(cap));
+            }
+        }
+        need[0].min(need[1])
+    }
+
     /// The windows to try, longest last, and the end of the non-compliant core.
     fn windows(&self, s_a: f64, s_b: f64) -> Result<Plan, CorrectError> {
         let p = self.p;
@@ -163,7 +203,12 @@ impl Repairer<'_, '_> {
         let ca = self.to_compliant(s_a, -1.0, self.s_e, s_a);
         let cb = self.to_compliant(s_b, 1.0, s_b, (s_b + p.max_window_m).min(total));
         let core = cb - ca;
-        let base = (3.0 * p.d_safe()).max(1.0).max(4.0 * p.spacing_m);
+        // Adaptive start: the patch leaves the path at about 45° (the lateral starts' tent), so the window
+        // must extend past the core by at least the sideways distance that clears it.
+        let base = (3.0 * p.d_safe())
+            .max(1.0)
+            .max(4.0 * p.spacing_m)
+            .max(1.25 * self.lateral_need(ca, cb) + p.spacing_m);
         let mut exts = vec![base];
         while core + 2.0 * exts[exts.len() - 1] * 1.6 < p.max_window_m {
             let e = exts[exts.len() - 1] * 1.6;
@@ -384,4 +429,53 @@ fn bbox(points: &[Point2]) -> (Point2, Point2) {
         hi = Point2::new(hi.x.max(q.x), hi.y.max(q.y));
     }
     (lo, hi)
+}
+
+/// Test hook: the windows of a repair and what optimising each gave (s0, s1, iterations, feasible).
+#[cfg(test)]
+pub(crate) fn trace_windows(
+    path: &[Point2],
+    breach: &Breach,
+    world: &World<'_>,
+    p: &CorrectParams,
+) -> Vec<(f64, f64, u32, bool, f64, f64)> {
+    let Ok((r, s_a, s_b)) = prepare(path, breach, world, p) else {
+        return Vec::new();
+    };
+    let t = std::time::Instant::now();
+    let Ok(plan) = r.windows(s_a, s_b) else {
+        return Vec::new();
+    };
+    println!("    windows() {:?}", t.elapsed());
+    plan.usable
+        .iter()
+        .map(|win| {
+            let t = std::time::Instant::now();
+            let (lo, hi) = bbox(&win.with_free(&win.free));
+            let reach = 0.5 * (win.s1 - win.s0) + p.d_safe() + p.margin_m;
+            let pad = Point2::new(reach, reach).coords;
+            let local = LocalObstacles::new(world, lo - pad, hi + pad, p.d_safe() + p.margin_m);
+            println!("    local cache {:?}", t.elapsed());
+            let t = std::time::Instant::now();
+            let o = optimise_window(win, &local, world, p);
+            println!("    optimise_window {:?}", t.elapsed());
+            let t = std::time::Instant::now();
+            let _ = verify(&o.points, world, p.robot_radius_m);
+            println!("    verify {:?}", t.elapsed());
+            let t = std::time::Instant::now();
+            let mut cost = super::cost::WindowCost::new(win.head, win.tail, weights(p, win.h), &local, win.free.len());
+            let x: Vec<f64> = win.free.iter().flat_map(|q| [q.x, q.y]).collect();
+            for _ in 0..100 {
+                let _ = cost.value(&x);
+            }
+            println!("    eval (local) x100 {:?}", t.elapsed());
+            let t = std::time::Instant::now();
+            let mut cost = super::cost::WindowCost::new(win.head, win.tail, weights(p, win.h), world, win.free.len());
+            for _ in 0..100 {
+                let _ = cost.value(&x);
+            }
+            println!("    eval (world) x100 {:?}", t.elapsed());
+            (win.s0, win.s1, o.iterations, o.feasible, o.cost_before, o.cost_after)
+        })
+        .collect()
 }

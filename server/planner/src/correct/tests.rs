@@ -302,3 +302,109 @@ fn apply_splices() {
     let stop = Repair { to: 99, ..r };
     assert_eq!(apply(&path, &stop).len(), 5);
 }
+
+/// Convergence trace of the optimiser on a bench-like case (run with `--ignored --nocapture`).
+#[test]
+#[ignore = "diagnostic"]
+fn trace_convergence() {
+    use super::cost::WindowCost;
+    use super::lbfgs::minimize;
+    use super::optimize::{Window, weights};
+    use super::path::Arclen;
+    for (n, radius) in [(20usize, 0.13), (200, 0.4), (2000, 1.26)] {
+        let mut s = 99u64 + n as u64;
+        let mut next = move || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s % 1_000_000) as f64 / 1_000_000.0
+        };
+        let c = Point2::new(10.0, 5.05);
+        let live: Vec<Point2> = (0..n)
+            .map(|_| {
+                let (a, r) = (next() * std::f64::consts::TAU, radius * next().sqrt());
+                c + nalgebra::Vector2::new(r * a.cos(), r * a.sin())
+            })
+            .collect();
+        let site = Site::new(walled(20.0, 10.0), live);
+        let world = site.world();
+        let p = CorrectParams::default();
+        let path = vec![Point2::new(1.0, 5.0), Point2::new(19.0, 5.0)];
+        let b = judge(&path, 0, Point2::new(10.0 - radius - 2.0, 5.0), &world, &p);
+        let o = optimise(&path, &b[0], &world, &p).expect("ok");
+        println!(
+            "n {n}: optimise -> {:?}",
+            o.as_ref().map(|o| (o.iterations, o.waypoints.len()))
+        );
+        let arc = Arclen::new(&path);
+        let half = radius + p.d_safe() + 1.05;
+        let win = Window::new(&arc, 9.0 - half, 9.0 + half, p.spacing_m).expect("window");
+        let mut cost = WindowCost::new(win.head, win.tail, weights(&p, win.h), &world, win.free.len());
+        let x0: Vec<f64> = win
+            .free
+            .iter()
+            .enumerate()
+            .flat_map(|(i, q)| {
+                let t = i as f64 / win.free.len() as f64;
+                [
+                    q.x,
+                    q.y + (radius + 0.45) * (std::f64::consts::PI * t).sin().powi(2).sqrt(),
+                ]
+            })
+            .collect();
+        let f0 = cost.value(&x0);
+        let mut line = format!("  f0 {f0:.4}:");
+        for k in 1..=40 {
+            let m = minimize(&mut cost, &x0, k, 6, 1e-3, 0.0);
+            line += &format!(" {:.4}", m.f);
+        }
+        println!("{line}");
+    }
+}
+
+/// Window-by-window trace of a bench-like case with background clutter (run with `--ignored --nocapture`).
+#[test]
+#[ignore = "diagnostic"]
+fn trace_windows_bench_like() {
+    let mut s = 7u64;
+    let mut next = move || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s % 1_000_000) as f64 / 1_000_000.0
+    };
+    let mut background = Vec::new();
+    while background.len() < 8000 {
+        let (x, y) = (0.5 + next() * 19.0, 0.5 + next() * 19.0);
+        if (y - 10.0).abs() < 2.0 {
+            continue;
+        }
+        let ang = next() * std::f64::consts::PI;
+        for k in 0..40 {
+            let t = f64::from(k) * 0.05;
+            background.push(Point2::new(x + t * ang.cos(), y + t * ang.sin()));
+        }
+    }
+    for n in [20usize, 200, 2000] {
+        let radius = (n as f64 / (std::f64::consts::PI * 400.0)).sqrt();
+        let robot = Point2::new(6.0, 10.0);
+        let centre = Point2::new(robot.x + 2.5 + radius, 10.05);
+        let mut live = background.clone();
+        for _ in 0..n {
+            let (a, r) = (next() * std::f64::consts::TAU, radius * next().sqrt());
+            live.push(centre + nalgebra::Vector2::new(r * a.cos(), r * a.sin()));
+        }
+        let site = Site::new(walled(20.0, 20.0), live);
+        let world = site.world();
+        let p = CorrectParams::default();
+        let path = vec![Point2::new(1.0, 10.0), Point2::new(19.0, 10.0)];
+        let b = judge(&path, 0, robot, &world, &p);
+        println!("n {n}: breach {:?}", b.first().map(|b| (b.start, b.end)));
+        for w in super::repair::trace_windows(&path, &b[0], &world, &p) {
+            println!(
+                "  window {:.2}..{:.2}: {} iterations, feasible {}, J {:.2} -> {:.2}",
+                w.0, w.1, w.2, w.3, w.4, w.5
+            );
+        }
+    }
+}
