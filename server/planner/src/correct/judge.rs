@@ -6,9 +6,12 @@
 //! The judged part of the path is sampled at a step `h ≤ min(resolution / 2, robot_radius / 2)` along its
 //! segments (not only at waypoints: lanes are long straight segments). Each sample `i` gets
 //!
-//! - a clearance term `e_i = (max(0, d_safe − c_i) / margin)²`, with `c_i` the exact clearance
-//!   ([`World::clearance_upto`]: static map by the DESIGN §6 metric, live tree, 0 off the map) and
-//!   `d_safe = robot_radius + margin`; `e_i = 1` where the robot just touches an obstacle;
+//! - a clearance term `e_i = (max(0, d_safe − c_live, r − slack − c_static) / margin)²`, with `c_live` the
+//!   distance to the nearest live obstacle point, `c_static` the exact distance to the static map (DESIGN §6
+//!   metric; both 0 off the map), `d_safe = robot_radius + margin` and `slack` =
+//!   [`super::world::STATIC_SLACK_M`]: the plan was made on the static map and may run at exactly the radius
+//!   from its walls, so only new obstacles must keep the margin; `e_i = 1` where the robot just touches a live
+//!   obstacle;
 //! - at waypoints, when `max_curvature_per_m` is finite, a curvature term `(κ / κ_max − 1)²` for
 //!   `κ > κ_max`, with `κ` the turning angle over the mean of the two adjacent segment lengths.
 //!
@@ -21,7 +24,7 @@ use crate::geom::{Point2, heading_change};
 
 use super::params::CorrectParams;
 use super::path::PathPos;
-use super::world::World;
+use super::world::{STATIC_SLACK_M, World};
 
 /// A maximal non-compliant stretch of the path ahead of the robot.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -125,12 +128,16 @@ pub fn judge(path: &[Point2], ahead_from: usize, robot: Point2, world: &World<'_
             if (q - robot).norm_squared() > r2 {
                 break 'walk;
             }
-            let c = if world.inside(q) {
-                world.clearance_upto(q, d_safe)
+            // The plan was made on the static map: its own distance to walls (often exactly the radius) is
+            // no breach; only new (live) obstacles must keep d_safe, and the static map only the radius.
+            let (c_live, c_static) = if world.inside(q) {
+                (world.live_clearance(q), world.static_clearance_upto(q, d_safe))
             } else {
-                0.0
+                (0.0, 0.0)
             };
-            let deficit = ((d_safe - c).max(0.0) / p.margin_m).powi(2);
+            let c = c_live.min(c_static);
+            let static_short = p.robot_radius_m - STATIC_SLACK_M - c_static;
+            let deficit = ((d_safe - c_live).max(static_short).max(0.0) / p.margin_m).powi(2);
             let e = deficit + if j == 0 { kappa_term } else { 0.0 };
             let pos = PathPos::new(k, t.min(1.0));
             if e > 0.0 {

@@ -12,7 +12,7 @@ use super::optimize::{Window, end_segment, optimise_window, start_segment, weigh
 use super::params::CorrectParams;
 use super::path::Arclen;
 use super::verify::{segment_clear, verify};
-use super::world::World;
+use super::world::{STATIC_SLACK_M, World};
 use super::{Repair, RepairKind};
 
 /// Most cells of a detour's search box.
@@ -136,10 +136,13 @@ struct Repairer<'a, 'w> {
 }
 
 impl Repairer<'_, '_> {
+    /// Compliant as the judge means it: d_safe from live obstacles, the radius from the static map.
     fn compliant(&self, s: f64) -> bool {
         let q = self.arc.point_at(s);
         let d = self.p.d_safe();
-        self.world.inside(q) && self.world.clearance_upto(q, d) >= d
+        self.world.inside(q)
+            && self.world.live_clearance(q) >= d
+            && self.world.static_clearance_upto(q, d) >= self.p.robot_radius_m - STATIC_SLACK_M
     }
 
     /// Moves `s` back (dir −1) or forward (dir 1) in steps of h while the path is non-compliant, within

@@ -17,6 +17,14 @@ use crate::map::{DistanceField, IkdTree, OccupancyGrid};
 
 use super::error::CorrectError;
 
+/// How far under a requested clearance a point may be from the *static* map and still count as clear,
+/// metres. Plans hug walls at exactly the robot radius (lanes and edge passes are placed on cell centres at
+/// that distance), so a patch that starts and ends on such a lane must be allowed the same distance; the
+/// chord-sag allowance [`super::verify`] adds between samples (half a millimetre at the usual step) would
+/// otherwise reject the plan's own wall-side stretches. One millimetre is far below any occupancy map's
+/// accuracy; live obstacle points get no slack.
+pub const STATIC_SLACK_M: f64 = 1e-3;
+
 /// The obstacles of one site as a correction sees them. Map frame, metres.
 #[derive(Debug, Clone, Copy)]
 pub struct World<'a> {
@@ -183,11 +191,13 @@ impl<'a> World<'a> {
         self.static_clearance_upto(p, upto).min(self.live_clearance(p))
     }
 
-    /// True when `p` is on the map and at least `radius_m` from every non-free cell centre (DESIGN §6) and
-    /// every live obstacle point.
+    /// True when `p` is on the map, at least `radius_m` from every live obstacle point, and at least
+    /// `radius_m −` [`STATIC_SLACK_M`] from every non-free cell centre (DESIGN §6).
     #[inline]
     pub fn clear_of(&self, p: Point2, radius_m: f64) -> bool {
-        self.inside(p) && self.clearance_upto(p, radius_m) >= radius_m
+        self.inside(p)
+            && self.live_clearance(p) >= radius_m
+            && self.static_clearance_upto(p, radius_m) >= radius_m - STATIC_SLACK_M
     }
 }
 
