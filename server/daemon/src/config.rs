@@ -21,6 +21,8 @@ pub struct Config {
     pub demo: DemoConfig,
     /// The fleet over Zenoh.
     pub zenoh: crate::fleet::config::ZenohConfig,
+    /// MCAP recording.
+    pub record: crate::record::config::RecordConfig,
 }
 
 /// `[http]`.

@@ -21,6 +21,7 @@ use crate::config::Config;
 use crate::fleet::live::LiveMaps;
 use crate::fleet::{self, Fleet};
 use crate::http::{AppState, router};
+use crate::record::Recording;
 use crate::store::Store;
 use crate::views::Views;
 
@@ -68,6 +69,8 @@ pub async fn run(
         None
     };
     let publisher = zenoh.as_ref().map(|(s, k)| fleet::publisher(s, k));
+    let live = Arc::new(LiveMaps::default());
+    let recording = Recording::start(&config, zenoh.as_ref().map(|(s, k)| (s, k)), live.clone()).await?;
     let (brain, engine_thread) = brain::spawn(
         engine,
         store.clone(),
@@ -75,10 +78,10 @@ pub async fn run(
         events.clone(),
         publisher,
         tokio::runtime::Handle::current(),
+        recording.as_ref().map(Recording::recorder),
     )
     .context("starting the engine thread")?;
     restore(&config, &store, &views, &brain).await?;
-    let live = Arc::new(LiveMaps::default());
     let fleet = match zenoh {
         Some((session, keys)) => Some(
             Fleet::start(&config.zenoh, session, keys, brain.clone(), views.clone(), live.clone())
@@ -127,6 +130,9 @@ pub async fn run(
     }
     brain.tell(Msg::Stop).await.ok();
     tokio::task::spawn_blocking(move || engine_thread.join()).await.ok();
+    if let Some(r) = recording {
+        r.finish().await.context("finishing the MCAP recording")?;
+    }
     tracing::info!("shiftd stopped");
     Ok(())
 }
