@@ -277,9 +277,17 @@ mod tests {
             chunk_bytes: 4 * 1024,
         });
         w.set_preamble(Kind::EngineConfig, "/shift/engine/config", b"{\"run\":42}".to_vec());
+        let mut x = 0x9e37_79b9_7f4a_7c15u64;
         for i in 0..200u64 {
-            // Incompressible-ish payloads so the size limit is reached.
-            let data: Vec<u8> = (0..500u64).map(|j| ((i * 7919 + j * 104_729) % 251) as u8).collect();
+            // Incompressible payloads (xorshift) so the size limit is reached.
+            let data: Vec<u8> = (0..500)
+                .map(|_| {
+                    x ^= x << 13;
+                    x ^= x >> 7;
+                    x ^= x << 17;
+                    x as u8
+                })
+                .collect();
             w.write(Kind::PointCloud2, "shift/default/robots/r1/cloud", i, &data).expect("write");
         }
         w.finish().expect("finish");
