@@ -131,6 +131,7 @@ pub fn spawn(
     publisher: Option<PlanPublisher>,
     live: Arc<LiveMaps>,
     runtime: tokio::runtime::Handle,
+    recorder: Option<crate::record::Recorder>,
 ) -> std::io::Result<(BrainHandle, std::thread::JoinHandle<()>)> {
     let (tx, rx) = mpsc::channel(INBOX);
     let (running_tx, running_rx) = watch::channel(0);
@@ -146,6 +147,7 @@ pub fn spawn(
         live,
         publisher,
         running: running_tx,
+        recorder,
     };
     let thread = std::thread::Builder::new()
         .name("engine".into())
@@ -169,6 +171,7 @@ struct Brain {
     live: Arc<LiveMaps>,
     publisher: Option<PlanPublisher>,
     running: watch::Sender<usize>,
+    recorder: Option<crate::record::Recorder>,
 }
 
 impl Brain {
@@ -182,11 +185,12 @@ impl Brain {
                         Event::JobFinished { plan_id, .. } => Some(plan_id.clone()),
                         _ => None,
                     };
-                    let result = self
-                        .engine
-                        .handle(*event, now_ms())
-                        .map_err(BrainError::from)
-                        .and_then(|cmds| self.execute(cmds));
+                    let now = now_ms();
+                    // MCAP recording of the engine's inputs and decisions (no-op without a recorder).
+                    let seq = crate::record::input(self.recorder.as_ref(), &event, now);
+                    let handled = self.engine.handle(*event, now);
+                    crate::record::output(self.recorder.as_ref(), seq, now, &handled);
+                    let result = handled.map_err(BrainError::from).and_then(|cmds| self.execute(cmds));
                     if let Some(id) = finished {
                         self.jobs.finished(&id);
                     }

@@ -23,6 +23,8 @@ pub struct Config {
     pub zenoh: crate::fleet::config::ZenohConfig,
     /// Watching assigned plans and correcting them around new obstacles (IKD-SWOpt).
     pub watch: shift_engine::WatchParams,
+    /// MCAP recording.
+    pub record: crate::record::config::RecordConfig,
 }
 
 /// `[http]`.

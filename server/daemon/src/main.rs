@@ -34,6 +34,8 @@ enum Command {
     Plan(PlanArgs),
     /// Evaluate every decomposition × order and the baselines on a folder of scenes.
     Eval(EvalArgs),
+    /// Replay an MCAP recording onto Zenoh with its original timing, or through the engine (--into-engine).
+    Replay(shiftd::replay::ReplayArgs),
 }
 
 #[derive(clap::Args)]
@@ -53,6 +55,9 @@ struct ServeArgs {
     /// Zenoh endpoint to connect to (repeatable; replaces [zenoh] connect), e.g. tcp/10.0.0.5:7447.
     #[arg(long)]
     zenoh_connect: Vec<String>,
+    /// Record everything ingested and decided to MCAP files in this folder (overrides [record] dir).
+    #[arg(long)]
+    record: Option<PathBuf>,
 }
 
 #[derive(clap::Args)]
@@ -146,6 +151,7 @@ fn main() -> ExitCode {
         Command::Serve(args) => cmd_serve(args),
         Command::Plan(args) => cmd_plan(args),
         Command::Eval(args) => cmd_eval(args),
+        Command::Replay(args) => shiftd::replay::run_cli(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -173,6 +179,9 @@ fn cmd_serve(args: ServeArgs) -> Result<()> {
     }
     if !args.zenoh_connect.is_empty() {
         config.zenoh.connect = args.zenoh_connect;
+    }
+    if let Some(dir) = args.record {
+        config.record.dir = dir;
     }
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .enable_all()

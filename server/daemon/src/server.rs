@@ -21,6 +21,7 @@ use crate::config::Config;
 use crate::fleet::live::LiveMaps;
 use crate::fleet::{self, Fleet};
 use crate::http::{AppState, router};
+use crate::record::Recording;
 use crate::store::Store;
 use crate::views::Views;
 
@@ -70,6 +71,7 @@ pub async fn run(
     };
     let publisher = zenoh.as_ref().map(|(s, k)| fleet::publisher(s, k));
     let live = Arc::new(LiveMaps::default());
+    let recording = Recording::start(&config, zenoh.as_ref().map(|(s, k)| (s, k)), live.clone()).await?;
     let (brain, engine_thread) = brain::spawn(
         engine,
         store.clone(),
@@ -78,6 +80,7 @@ pub async fn run(
         publisher,
         live.clone(),
         tokio::runtime::Handle::current(),
+        recording.as_ref().map(Recording::recorder),
     )
     .context("starting the engine thread")?;
     restore(&config, &store, &views, &brain).await?;
@@ -129,6 +132,9 @@ pub async fn run(
     }
     brain.tell(Msg::Stop).await.ok();
     tokio::task::spawn_blocking(move || engine_thread.join()).await.ok();
+    if let Some(r) = recording {
+        r.finish().await.context("finishing the MCAP recording")?;
+    }
     tracing::info!("shiftd stopped");
     Ok(())
 }

@@ -11,6 +11,7 @@ pub mod error;
 pub mod job;
 pub mod live_map;
 pub mod plan;
+pub mod recorded;
 pub mod request;
 pub mod robots;
 pub mod site;
