@@ -75,11 +75,12 @@ pub(crate) fn waypoint_curvature(path: &[Point2], k: usize) -> f64 {
 /// `ahead_from` onwards, as long as it stays within `p.window_radius_m` of `robot` (map frame, metres; the
 /// first sample outside the circle ends the judged part), and returns its maximal non-compliant stretches
 /// whose cost exceeds `p.j_threshold` or that come closer than the robot radius, in path order. Returns
-/// nothing for invalid `p` (see [`CorrectParams::validate`]), a path of fewer than two points,
+/// nothing for invalid `p` (see [`CorrectParams::validate`]), an inconsistent world ([`World::check`]), a
+/// path of fewer than two points,
 /// `ahead_from` past the last segment, or a non-finite `robot`.
 pub fn judge(path: &[Point2], ahead_from: usize, robot: Point2, world: &World<'_>, p: &CorrectParams) -> Vec<Breach> {
     let mut out = Vec::new();
-    if p.validate().is_err() || path.len() < 2 || ahead_from + 1 >= path.len() {
+    if p.validate().is_err() || world.check().is_err() || path.len() < 2 || ahead_from + 1 >= path.len() {
         return out;
     }
     if !(robot.x.is_finite() && robot.y.is_finite()) {

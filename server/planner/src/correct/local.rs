@@ -198,7 +198,7 @@ impl Obstacles for LocalObstacles<'_, '_> {
             return self.world.nearest_obstacle(p);
         }
         // Static: one cell look-up decides whether any site can be within the radius.
-        let g = &self.world.grid.geometry;
+        let g = self.world.field.geometry();
         let stat = match g.locate(p) {
             Some(c) if self.world.field.at(g.index(c)) >= self.radius + self.band => None,
             _ => self.world.nearest_static_fast(p),

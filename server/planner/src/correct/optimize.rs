@@ -28,6 +28,9 @@ const G_TOL: f64 = 1e-3;
 /// which points touch the d_safe hinge), and `verify` decides feasibility anyway.
 const F_REL_TOL: f64 = 1e-3;
 
+/// Most intervals a window is resampled into.
+const MAX_POINTS: usize = 1000;
+
 /// A window of the original path: anchors, fixed heading neighbours and the original free points.
 #[derive(Debug, Clone)]
 pub(crate) struct Window {
@@ -52,7 +55,8 @@ impl Window {
         if len.is_nan() || len <= 0.0 || arc.segments() == 0 {
             return None;
         }
-        let m = ((len / spacing).ceil() as usize).max(4);
+        // At most MAX_POINTS intervals whatever the spacing (bounded work on any input).
+        let m = ((len / spacing).ceil().min(MAX_POINTS as f64) as usize).max(4);
         let h = len / m as f64;
         let seg0 = start_segment(arc, s0);
         let seg1 = end_segment(arc, s1);

@@ -93,7 +93,8 @@ impl<'a> World<'a> {
     /// distance field sees it, with its distance (metres). Never nearer than the true nearest site.
     #[inline]
     pub fn nearest_static_fast(&self, p: Point2) -> Option<(Point2, f64)> {
-        let g = &self.grid.geometry;
+        // The field's own geometry indexes the field (so a world built without `new` cannot index out of it).
+        let g = self.field.geometry();
         let (cx, cy) = g.to_cell_coords(p);
         if !(cx.is_finite() && cy.is_finite()) {
             return None;
