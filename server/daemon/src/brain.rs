@@ -10,6 +10,7 @@ use shift_proto::{PlanEvent, SiteSummary};
 use tokio::sync::{broadcast, mpsc, oneshot, watch};
 
 use crate::fleet::PlanPublisher;
+use crate::fleet::live::LiveMaps;
 use crate::jobs::JobRunner;
 use crate::store::Store;
 use crate::views::Views;
@@ -120,18 +121,19 @@ pub fn now_ms() -> u64 {
         .map_or(0, |d| d.as_millis() as u64)
 }
 
-/// Starts the engine thread.
+/// Starts the engine thread. With `overlay`, plan jobs see their site's live obstacle points.
 pub fn spawn(
     engine: Engine,
     store: Arc<Store>,
     views: Arc<Views>,
     events: broadcast::Sender<PlanEvent>,
     publisher: Option<PlanPublisher>,
+    overlay: Option<Arc<LiveMaps>>,
     runtime: tokio::runtime::Handle,
 ) -> std::io::Result<(BrainHandle, std::thread::JoinHandle<()>)> {
     let (tx, rx) = mpsc::channel(INBOX);
     let (running_tx, running_rx) = watch::channel(0);
-    let jobs = JobRunner::new(runtime, tx.clone());
+    let jobs = JobRunner::new(runtime, tx.clone(), overlay);
     let brain = Brain {
         engine,
         store,

@@ -528,6 +528,7 @@ impl Engine {
                         grid,
                         request: rec.request.clone(),
                         options,
+                        overlay: Vec::new(),
                     }));
                 }
                 Err(e) => {
