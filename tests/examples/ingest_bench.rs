@@ -186,7 +186,11 @@ fn quantile(before: &Scrape, after: &Scrape, name: &str, q: f64) -> Option<f64> 
             if le.is_infinite() {
                 return Some(prev.0);
             }
-            let f = if n > prev.1 { (rank - prev.1) / (n - prev.1) } else { 1.0 };
+            let f = if n > prev.1 {
+                (rank - prev.1) / (n - prev.1)
+            } else {
+                1.0
+            };
             return Some(prev.0 + f * (le - prev.0));
         }
         prev = (le, n);

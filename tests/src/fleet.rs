@@ -68,7 +68,11 @@ pub fn obstacle_box(x0: f32, y0: f32, n: usize, layers: usize) -> Vec<[f32; 3]> 
     for i in 0..n {
         for j in 0..n {
             for k in 0..layers {
-                pts.push([x0 + 0.01 + i as f32 * 0.02, y0 + 0.01 + j as f32 * 0.02, 0.21 + k as f32 * 0.2]);
+                pts.push([
+                    x0 + 0.01 + i as f32 * 0.02,
+                    y0 + 0.01 + j as f32 * 0.02,
+                    0.21 + k as f32 * 0.2,
+                ]);
             }
         }
     }

@@ -40,7 +40,11 @@ impl Robot {
             .ok_or_else(|| anyhow!("no key for {stream:?}"))?;
         self.seq += 1;
         let put = self.session.put(&key, bytes).encoding(Encoding::APPLICATION_CDR);
-        let put = if attach { put.attachment(rmw_attachment(self.seq)) } else { put };
+        let put = if attach {
+            put.attachment(rmw_attachment(self.seq))
+        } else {
+            put
+        };
         put.await.map_err(|e| anyhow!("put {key}: {e}"))
     }
 }
@@ -117,7 +121,9 @@ async fn ros2_robot_feeds_the_live_map(mapping: Ros2Mapping, attach: bool) -> Re
     assert_eq!(r["robot"], "bot1", "{r}");
     let robots = server.get("/v1/robots").await?.1;
     assert!(
-        robots.as_array().is_some_and(|a| a.iter().any(|r| r["robot"] == "bot1")),
+        robots
+            .as_array()
+            .is_some_and(|a| a.iter().any(|r| r["robot"] == "bot1")),
         "{robots}"
     );
 
@@ -125,7 +131,11 @@ async fn ros2_robot_feeds_the_live_map(mapping: Ros2Mapping, attach: bool) -> Re
     let mut pts = obstacle_box(5.0, 5.0, 10, 2);
     pts.push([5.0, 5.0, 0.0]);
     robot
-        .put(Stream::Cloud, encode_point_cloud2_xyz(&header("map", 101), &pts), attach)
+        .put(
+            Stream::Cloud,
+            encode_point_cloud2_xyz(&header("map", 101), &pts),
+            attach,
+        )
         .await?;
     poll(
         async || Ok((site_points(&server).await?.0 == 32).then_some(())),
@@ -171,7 +181,11 @@ async fn ros2_robot_feeds_the_live_map(mapping: Ros2Mapping, attach: bool) -> Re
         "four dropped scans",
     )
     .await?;
-    assert_eq!(site_points(&server).await?.0, 36, "nothing of the dropped scans reached the map");
+    assert_eq!(
+        site_points(&server).await?.0,
+        36,
+        "nothing of the dropped scans reached the map"
+    );
     let metrics = server.http.get(server.url("/metrics")).send().await?.text().await?;
     for reason in ["future", "too_old", "malformed"] {
         let line = format!("shift_ingest_dropped_total{{reason=\"{reason}\",stream=\"scan\"}}");
@@ -179,12 +193,10 @@ async fn ros2_robot_feeds_the_live_map(mapping: Ros2Mapping, attach: bool) -> Re
     }
     assert!(metrics.contains("shift_ingest_latency_seconds_bucket"), "{metrics}");
 
-    // Silence: a ROS 2 robot is lost after robot_timeout_s and back with its next message; a native robot
-    // stays alive while its token does.
-    if native {
-        if let Some(t) = token {
-            t.undeclare().await.map_err(|e| anyhow!("{e}"))?;
-        }
+    // Silence: a ROS 2 robot is lost after robot_timeout_s and back with its next message; a native robot is
+    // lost when its token goes.
+    if let Some(t) = token {
+        t.undeclare().await.map_err(|e| anyhow!("{e}"))?;
     }
     poll(
         async || {

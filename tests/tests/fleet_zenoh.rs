@@ -1,7 +1,6 @@
 //! End-to-end over Zenoh on loopback (no scouting): a scripted robot announces itself, streams CDR odometry
 //! and clouds, receives its plan, a late joiner fetches it by query, and losing the token marks it lost.
 
-
 use anyhow::{Context, Result, anyhow};
 use serde_json::{Value, json};
 use shift_proto::PlanDocument;

@@ -256,7 +256,10 @@ mod tests {
                 let key = m.robot_key(&keys, "bot1", stream).expect("valid").expect("a key");
                 assert_eq!(m.classify(&keys, &key), Some(("bot1".into(), stream)), "{m:?} {key}");
             }
-            assert_eq!(m.robot_key(&keys, "bot1", Stream::Alive).expect("valid").is_some(), m.has_liveliness());
+            assert_eq!(
+                m.robot_key(&keys, "bot1", Stream::Alive).expect("valid").is_some(),
+                m.has_liveliness()
+            );
             assert!(m.robot_key(&keys, "a/b", Stream::Odom).is_err());
         }
         let scan = Ros2Mapping::RmwZenoh { domain: 0 }

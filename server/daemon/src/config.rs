@@ -153,10 +153,7 @@ mod tests {
         assert_eq!(c.jobs.effective_workers(), 3);
         assert_eq!(c.http.auth_token, "s3");
         let c = Config::parse("[zenoh]\nmapping = { kind = \"rmw_zenoh\", domain = 7 }").expect("rmw_zenoh");
-        assert_eq!(
-            c.zenoh.mapping,
-            shift_proto::keys::Ros2Mapping::RmwZenoh { domain: 7 }
-        );
+        assert_eq!(c.zenoh.mapping, shift_proto::keys::Ros2Mapping::RmwZenoh { domain: 7 });
         let c = Config::parse("[zenoh.mapping]\nkind = \"bridge_ros2dds\"\nnamespace = \"site1\"").expect("bridge");
         assert_eq!(
             c.zenoh.mapping,

@@ -56,11 +56,7 @@ impl PlanMonitor for Monitor {
 impl JobRunner {
     /// A runner spawning on `runtime`'s blocking pool and reporting to the engine thread; with `overlay`,
     /// each job sees its site's live obstacle points (see [`live_overlay`]).
-    pub fn new(
-        runtime: tokio::runtime::Handle,
-        to_engine: mpsc::Sender<Msg>,
-        overlay: Option<Arc<LiveMaps>>,
-    ) -> Self {
+    pub fn new(runtime: tokio::runtime::Handle, to_engine: mpsc::Sender<Msg>, overlay: Option<Arc<LiveMaps>>) -> Self {
         Self {
             runtime,
             to_engine,
@@ -137,8 +133,12 @@ impl JobRunner {
 /// The site's live obstacle points as (x, y) in the map frame, metres (empty without a live map). Every point
 /// of the live map is already an obstacle: the height band was applied when it was ingested.
 pub fn live_overlay(live: &LiveMaps, site: &str) -> Vec<[f64; 2]> {
-    let Some(site_live) = live.get(site) else { return Vec::new() };
-    let Ok(map) = site_live.map.read() else { return Vec::new() };
+    let Some(site_live) = live.get(site) else {
+        return Vec::new();
+    };
+    let Ok(map) = site_live.map.read() else {
+        return Vec::new();
+    };
     let points: Vec<[f64; 2]> = map
         .tree()
         .flatten()

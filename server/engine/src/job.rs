@@ -232,7 +232,10 @@ mod tests {
         let mut overlaid = (*grid).clone();
         let changed = apply_overlay(&mut overlaid, &job.overlay, Point2::new(0.5, 0.5), 0.3);
         assert_eq!(changed, 36, "6 × 6 cells of 0.1 m");
-        assert_eq!(res.space.grid.cells, overlaid.cells, "the job planned on the overlaid grid");
+        assert_eq!(
+            res.space.grid.cells, overlaid.cells,
+            "the job planned on the overlaid grid"
+        );
         let m = res.profile.metrics;
         assert_eq!(m.collisions, 0, "{m:?}");
         assert!(m.coverage_pct >= 99.0, "{m:?}");

@@ -237,7 +237,10 @@ mod tests {
             h.at(1_200_000_000),
             Err(PoseLookupError::Future { ahead_ns: 100_000_000 })
         );
-        assert_eq!(h.at(900_000_000), Err(PoseLookupError::TooOld { behind_ns: 100_000_000 }));
+        assert_eq!(
+            h.at(900_000_000),
+            Err(PoseLookupError::TooOld { behind_ns: 100_000_000 })
+        );
         assert_eq!(h.at(900_000_000).map_err(|e| e.kind()), Err("too_old"));
     }
 

@@ -4,7 +4,7 @@
 //!
 //! Poses: the odometry path feeds a short per-robot [`PoseHistory`]. A LaserScan is placed with the pose
 //! interpolated at its stamp (a stamp outside the history, beyond the tolerance, drops the scan: `too_old`,
-//! `future`, `no_pose`); a robot-frame cloud uses the pose at its stamp when the history covers it and the
+//! `future`, `no_pose`; an unstamped scan, stamp 0, takes the latest pose); a robot-frame cloud uses the pose at its stamp when the history covers it and the
 //! latest pose otherwise; map-frame clouds need no pose. Malformed payloads are counted and logged at most once
 //! a second; they never stop the thread.
 
@@ -218,7 +218,10 @@ impl Ingest {
 
     /// The robot's pose at `stamp_ns` from its odometry history.
     fn pose_at(&self, robot: &str, stamp_ns: i64) -> Result<Pose2, Dropped> {
-        let poses = self.poses.lock().map_err(|_| Dropped::new("internal", "pose lock poisoned"))?;
+        let poses = self
+            .poses
+            .lock()
+            .map_err(|_| Dropped::new("internal", "pose lock poisoned"))?;
         let h = poses.get(robot);
         if stamp_ns == 0 {
             // Unstamped: the latest pose is the best there is.

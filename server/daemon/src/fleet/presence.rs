@@ -39,7 +39,13 @@ impl Presence {
                 !s.alive
             }
             None => {
-                m.insert(robot.to_owned(), Seen { last: now, alive: false });
+                m.insert(
+                    robot.to_owned(),
+                    Seen {
+                        last: now,
+                        alive: false,
+                    },
+                );
                 true
             }
         }
@@ -56,7 +62,9 @@ impl Presence {
 
     /// Robots alive whose last message is older than the timeout at `now`; they are marked lost.
     pub fn expire(&self, now: Instant) -> Vec<String> {
-        let Ok(mut m) = self.robots.lock() else { return Vec::new() };
+        let Ok(mut m) = self.robots.lock() else {
+            return Vec::new();
+        };
         let mut lost = Vec::new();
         for (robot, s) in m.iter_mut() {
             if s.alive && now.saturating_duration_since(s.last) > self.timeout {
@@ -86,7 +94,10 @@ mod tests {
         assert!(p.seen("bot1", t0), "not yet confirmed: report again");
         p.reported_alive("bot1");
         assert!(!p.seen("bot1", t0 + Duration::from_secs(1)));
-        assert!(p.expire(t0 + Duration::from_millis(2900)).is_empty(), "1.9 s since the last");
+        assert!(
+            p.expire(t0 + Duration::from_millis(2900)).is_empty(),
+            "1.9 s since the last"
+        );
         assert_eq!(p.expire(t0 + Duration::from_millis(3100)), vec!["bot1".to_owned()]);
         assert!(p.expire(t0 + Duration::from_secs(9)).is_empty(), "reported lost once");
         assert!(p.seen("bot1", t0 + Duration::from_secs(10)), "back");

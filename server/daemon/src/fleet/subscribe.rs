@@ -74,7 +74,11 @@ impl Route {
                     stamp_ns: p.stamp_ns,
                 };
                 self.ingest.push_pose(&robot, pose);
-                if self.brain.try_tell(Msg::event(Event::RobotPose { robot, pose })).is_err() {
+                if self
+                    .brain
+                    .try_tell(Msg::event(Event::RobotPose { robot, pose }))
+                    .is_err()
+                {
                     metrics::counter!("shift_odom_dropped_total", "reason" => "engine_busy").increment(1);
                 }
             }
@@ -132,7 +136,9 @@ pub async fn data_subscriptions(
                 }
                 for robot in presence.expire(Instant::now()) {
                     tracing::info!(robot, "robot silent for robot_timeout_s: lost");
-                    let _ = brain.tell(Msg::event(Event::RobotLiveliness { robot, alive: false })).await;
+                    let _ = brain
+                        .tell(Msg::event(Event::RobotLiveliness { robot, alive: false }))
+                        .await;
                 }
             }
         }));
