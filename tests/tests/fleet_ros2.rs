@@ -13,6 +13,7 @@ use shift_proto::ros::point_cloud2::encode_point_cloud2_xyz;
 use shift_tests::fleet::{free_port, header, header_ns, obstacle_box, odom_at, poll, robot_session};
 use shift_tests::{TestServer, test_config};
 use zenoh::bytes::Encoding;
+use zenoh::qos::CongestionControl;
 
 /// rmw_zenoh's attachment: i64 sequence number, i64 source time (ns), 16-byte gid with its length (33 bytes).
 fn rmw_attachment(seq: i64) -> Vec<u8> {
@@ -39,7 +40,11 @@ impl Robot {
             .robot_key(&self.keys, "bot1", stream)?
             .ok_or_else(|| anyhow!("no key for {stream:?}"))?;
         self.seq += 1;
-        let put = self.session.put(&key, bytes).encoding(Encoding::APPLICATION_CDR);
+        let put = self
+            .session
+            .put(&key, bytes)
+            .encoding(Encoding::APPLICATION_CDR)
+            .congestion_control(CongestionControl::Block);
         let put = if attach {
             put.attachment(rmw_attachment(self.seq))
         } else {

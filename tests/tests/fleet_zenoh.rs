@@ -10,6 +10,7 @@ use shift_proto::ros::point_cloud2::encode_point_cloud2_xyz;
 use shift_tests::fleet::{LONG, free_port, header, obstacle_box, odom, poll, robot_session};
 use shift_tests::{TestServer, demo_request, test_config};
 use zenoh::bytes::Encoding;
+use zenoh::qos::CongestionControl;
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn robot_streams_gets_its_plan_and_is_lost_when_its_token_drops() -> Result<()> {
@@ -53,6 +54,7 @@ async fn robot_streams_gets_its_plan_and_is_lost_when_its_token_drops() -> Resul
     robot
         .put("shift/default/robots/r1/odom", encode_odometry(&odom(0.5, 0.5, 1)))
         .encoding(Encoding::APPLICATION_CDR)
+        .congestion_control(CongestionControl::Block)
         .await
         .map_err(|e| anyhow!("{e}"))?;
     // Cell-centred so no point sits on a voxel boundary.
@@ -64,6 +66,7 @@ async fn robot_streams_gets_its_plan_and_is_lost_when_its_token_drops() -> Resul
             encode_point_cloud2_xyz(&header("map", 1), &pts),
         )
         .encoding(Encoding::APPLICATION_CDR)
+        .congestion_control(CongestionControl::Block)
         .await
         .map_err(|e| anyhow!("{e}"))?;
     let site = poll(
@@ -123,6 +126,7 @@ async fn robot_streams_gets_its_plan_and_is_lost_when_its_token_drops() -> Resul
                 encode_odometry(&odom(w.x, w.y, 2 + n as i32)),
             )
             .encoding(Encoding::APPLICATION_CDR)
+            .congestion_control(CongestionControl::Block)
             .await
             .map_err(|e| anyhow!("{e}"))?;
     }

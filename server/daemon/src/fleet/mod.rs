@@ -22,6 +22,7 @@ use shift_proto::ros::{Header, Time};
 use tokio::task::JoinHandle;
 use tokio_util::sync::CancellationToken;
 use zenoh::bytes::Encoding;
+use zenoh::qos::CongestionControl;
 use zenoh::sample::SampleKind;
 
 use self::config::ZenohConfig;
@@ -77,7 +78,10 @@ impl PlanPublisher {
                 Ok(j) => j,
                 Err(e) => return tracing::error!("plan JSON: {e}"),
             };
-            if let Err(e) = session.put(&plan_key, json).encoding(Encoding::APPLICATION_JSON).await {
+            // Block, not drop, when the link is congested: a plan is worth the wait (this task is the one
+            // waiting, never the engine).
+            let put = session.put(&plan_key, json).encoding(Encoding::APPLICATION_JSON);
+            if let Err(e) = put.congestion_control(CongestionControl::Block).await {
                 tracing::warn!(robot, "publishing the plan: {e}");
             }
             let header = Header {
@@ -85,7 +89,8 @@ impl PlanPublisher {
                 frame_id: doc.frame.clone(),
             };
             let cdr = encode_path(&header, &path_poses(&doc));
-            if let Err(e) = session.put(&path_key, cdr).encoding(Encoding::APPLICATION_CDR).await {
+            let put = session.put(&path_key, cdr).encoding(Encoding::APPLICATION_CDR);
+            if let Err(e) = put.congestion_control(CongestionControl::Block).await {
                 tracing::warn!(robot, "publishing the ROS path: {e}");
             }
         });
