@@ -14,8 +14,9 @@ pub mod ros;
 pub mod scene;
 
 pub use api::{
-    AssignRequest, ErrorBody, ErrorDetail, PlanAccepted, PlanEvent, PlanOptions, PlanRequest, PlanStatus,
-    PlanStatusResponse, PoseView, LastCorrection, RegionReady, RobotSpec, RobotView, SiteSummary, SpeedProfileResponse, SpeedSample,
+    AssignRequest, ErrorBody, ErrorDetail, LastCorrection, PlanAccepted, PlanEvent, PlanOptions, PlanRequest,
+    PlanStatus, PlanStatusResponse, PoseView, RegionReady, RobotSpec, RobotView, SiteSummary, SpeedProfileResponse,
+    SpeedSample,
 };
 pub use attribute::{AttributeBlobDoc, AttributeDoc};
 pub use correction::{CorrectionDoc, CorrectionError, CorrectionReason};

@@ -41,7 +41,11 @@ fn ahead(w: &[WaypointDoc], i: usize, ahead_m: f64) -> Option<(f64, f64, usize)>
         let l = (w[k + 1].x - w[k].x).hypot(w[k + 1].y - w[k].y);
         if l >= left && l > 0.0 {
             let f = left / l;
-            return Some((w[k].x + f * (w[k + 1].x - w[k].x), w[k].y + f * (w[k + 1].y - w[k].y), k));
+            return Some((
+                w[k].x + f * (w[k + 1].x - w[k].x),
+                w[k].y + f * (w[k + 1].y - w[k].y),
+                k,
+            ));
         }
         left -= l;
     }
@@ -60,7 +64,9 @@ async fn main() -> Result<()> {
     config.zenoh.horizon_s = 30;
     config.demo.enabled = false;
     let server = TestServer::start(config).await?;
-    let (code, body) = server.post("/v1/sites/hall/map", &room_grid(480, 240, 0.05, &[])).await?;
+    let (code, body) = server
+        .post("/v1/sites/hall/map", &room_grid(480, 240, 0.05, &[]))
+        .await?;
     if code != 201 {
         bail!("map upload: {code} {body}");
     }
@@ -68,8 +74,12 @@ async fn main() -> Result<()> {
     let req = json!({"site": "hall", "start": [0.5, 0.5], "robot": {"radius": 0.15, "tool_width": 0.3}});
     let (_, acc) = server.post("/v1/plans", &req).await?;
     let id = acc["plan_id"].as_str().context("plan id")?.to_owned();
-    server.wait_plan(&id, Duration::from_secs(600), |s| s == "ready").await?;
-    server.post(&format!("/v1/plans/{id}/assign"), &json!({"robot": "r1"})).await?;
+    server
+        .wait_plan(&id, Duration::from_secs(600), |s| s == "ready")
+        .await?;
+    server
+        .post(&format!("/v1/plans/{id}/assign"), &json!({"robot": "r1"}))
+        .await?;
     let (_, served) = server.get(&format!("/v1/plans/{id}/path")).await?;
     let mut doc: PlanDocument = serde_json::from_value(served)?;
 
@@ -119,8 +129,11 @@ async fn main() -> Result<()> {
                     break; // the rest of the plan was dropped
                 }
                 // Let the re-check of the corrected window settle before the next obstacle.
-                while let Ok(Ok(more)) =
-                    tokio::time::timeout(Duration::from_millis(150), robot.next_correction(Duration::from_secs(1))).await
+                while let Ok(Ok(more)) = tokio::time::timeout(
+                    Duration::from_millis(150),
+                    robot.next_correction(Duration::from_secs(1)),
+                )
+                .await
                 {
                     doc = more.apply(&doc).context("a follow-up correction applies")?;
                 }

@@ -33,7 +33,9 @@ async fn planned(site: &str, map: Value, start: [f64; 2]) -> Result<Planned> {
     let (_, acc) = server.post("/v1/plans", &req).await?;
     let id = acc["plan_id"].as_str().context("plan id")?.to_owned();
     server.wait_plan(&id, LONG, |s| s == "ready").await?;
-    let (code, st) = server.post(&format!("/v1/plans/{id}/assign"), &json!({"robot": "r1"})).await?;
+    let (code, st) = server
+        .post(&format!("/v1/plans/{id}/assign"), &json!({"robot": "r1"}))
+        .await?;
     if code != 200 {
         bail!("assign: {code} {st}");
     }
@@ -52,7 +54,9 @@ fn longest_straight(w: &[WaypointDoc]) -> (usize, usize) {
     let mut i = 0;
     while i + 1 < w.len() {
         let mut j = i + 1;
-        while j + 1 < w.len() && (i + 1..=j).all(|k| seg_dist((w[k].x, w[k].y), (w[i].x, w[i].y), (w[j + 1].x, w[j + 1].y)) < 1e-6) {
+        while j + 1 < w.len()
+            && (i + 1..=j).all(|k| seg_dist((w[k].x, w[k].y), (w[i].x, w[i].y), (w[j + 1].x, w[j + 1].y)) < 1e-6)
+        {
             j += 1;
         }
         if dist(w, i, j) > dist(w, best.0, best.1) {
@@ -109,7 +113,11 @@ fn clearance(w: &[WaypointDoc], range: std::ops::Range<usize>, pts: &[[f32; 3]])
 fn check_correction(old: &PlanDocument, c: &CorrectionDoc, obstacle: &[[f32; 3]], whole: bool) -> Result<PlanDocument> {
     let new = c.apply(old).map_err(|e| anyhow!("{e}"))?;
     assert_eq!(new.version, old.version + 1);
-    assert_eq!(&new.waypoints[..c.from], &old.waypoints[..c.from], "kept before the patch");
+    assert_eq!(
+        &new.waypoints[..c.from],
+        &old.waypoints[..c.from],
+        "kept before the patch"
+    );
     let tail = new.waypoints.len() - (old.waypoints.len() - c.to);
     for (a, b) in new.waypoints[tail..].iter().zip(&old.waypoints[c.to..]) {
         assert_eq!((a.x, a.y), (b.x, b.y), "kept after the patch");
@@ -120,9 +128,15 @@ fn check_correction(old: &PlanDocument, c: &CorrectionDoc, obstacle: &[[f32; 3]]
         c.from.saturating_sub(1)..(c.from + c.waypoints.len() + 1)
     };
     let d = clearance(&new.waypoints, range, obstacle);
-    assert!(d >= RADIUS - 1e-6, "corrected path comes {d:.3} m from an obstacle point (radius {RADIUS})");
+    assert!(
+        d >= RADIUS - 1e-6,
+        "corrected path comes {d:.3} m from an obstacle point (radius {RADIUS})"
+    );
     for w in &c.waypoints {
-        assert!(w.v.is_finite() && w.v > 0.0 && w.t.is_finite(), "re-profiled speeds and times: {w:?}");
+        assert!(
+            w.v.is_finite() && w.v > 0.0 && w.t.is_finite(),
+            "re-profiled speeds and times: {w:?}"
+        );
     }
     Ok(new)
 }
@@ -162,14 +176,24 @@ async fn an_obstacle_ahead_gets_a_clear_correction_the_robot_can_fetch() -> Resu
             }
         }
     }
-    assert!(clearance(w, seg.0..seg.1, &post) < RADIUS, "the old path runs into the post");
+    assert!(
+        clearance(w, seg.0..seg.1, &post) < RADIUS,
+        "the old path runs into the post"
+    );
     robot.cloud("r1", &post).await?;
 
     let c = robot.next_correction(LONG).await?;
     assert_eq!((c.plan_id.as_str(), c.robot.as_str()), (id.as_str(), "r1"));
     assert_eq!((c.base_version, c.version), (1, 2));
-    assert_ne!(c.reason, CorrectionReason::Skipped, "an open room leaves room to pass: {c:?}");
-    assert!(c.from > seg.0 && c.to <= seg.1, "the patch is on the lane with the post: {c:?}");
+    assert_ne!(
+        c.reason,
+        CorrectionReason::Skipped,
+        "an open room leaves room to pass: {c:?}"
+    );
+    assert!(
+        c.from > seg.0 && c.to <= seg.1,
+        "the patch is on the lane with the post: {c:?}"
+    );
     assert!(c.compute_us > 0);
     let new = check_correction(&doc, &c, &post, true)?;
     // The patch joins the lane: its ends lie on the old lane's line.

@@ -1,66 +1,16 @@
 //! End-to-end over Zenoh on loopback (no scouting): a scripted robot announces itself, streams CDR odometry
 //! and clouds, receives its plan, a late joiner fetches it by query, and losing the token marks it lost.
 
-use std::time::Duration;
-
 use anyhow::{Context, Result, anyhow};
 use serde_json::{Value, json};
 use shift_proto::PlanDocument;
-use shift_proto::ros::odometry::{Odometry, encode_odometry};
+use shift_proto::ros::odometry::encode_odometry;
 use shift_proto::ros::path::decode_path;
 use shift_proto::ros::point_cloud2::encode_point_cloud2_xyz;
-use shift_proto::ros::{Header, Time};
+use shift_tests::fleet::{LONG, free_port, header, obstacle_box, odom, poll, robot_session};
 use shift_tests::{TestServer, demo_request, test_config};
 use zenoh::bytes::Encoding;
-
-const LONG: Duration = Duration::from_secs(120);
-
-fn free_port() -> Result<u16> {
-    Ok(std::net::TcpListener::bind("127.0.0.1:0")?.local_addr()?.port())
-}
-
-async fn robot_session(endpoint: &str) -> Result<zenoh::Session> {
-    let mut c = zenoh::Config::default();
-    let set = |c: &mut zenoh::Config, k: &str, v: &str| c.insert_json5(k, v).map_err(|e| anyhow!("{k}: {e}"));
-    set(&mut c, "mode", "\"peer\"")?;
-    set(&mut c, "listen/endpoints", "[]")?;
-    set(&mut c, "connect/endpoints", &format!("[\"{endpoint}\"]"))?;
-    set(&mut c, "scouting/multicast/enabled", "false")?;
-    set(&mut c, "scouting/gossip/enabled", "false")?;
-    zenoh::open(c).await.map_err(|e| anyhow!("robot session: {e}"))
-}
-
-fn header(frame: &str, sec: i32) -> Header {
-    Header {
-        stamp: Time { sec, nanosec: 0 },
-        frame_id: frame.into(),
-    }
-}
-
-fn odom(x: f64, y: f64, sec: i32) -> Odometry {
-    let mut o = Odometry {
-        header: header("map", sec),
-        child_frame_id: "base_link".into(),
-        ..Odometry::default()
-    };
-    o.pose.pose.position.x = x;
-    o.pose.pose.position.y = y;
-    o.pose.pose.orientation.w = 1.0;
-    o
-}
-
-async fn poll<T>(mut f: impl AsyncFnMut() -> Result<Option<T>>, what: &str) -> Result<T> {
-    let deadline = tokio::time::Instant::now() + LONG;
-    loop {
-        if let Some(v) = f().await? {
-            return Ok(v);
-        }
-        if tokio::time::Instant::now() > deadline {
-            anyhow::bail!("timed out waiting for {what}");
-        }
-        tokio::time::sleep(Duration::from_millis(50)).await;
-    }
-}
+use zenoh::qos::CongestionControl;
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn robot_streams_gets_its_plan_and_is_lost_when_its_token_drops() -> Result<()> {
@@ -104,17 +54,11 @@ async fn robot_streams_gets_its_plan_and_is_lost_when_its_token_drops() -> Resul
     robot
         .put("shift/default/robots/r1/odom", encode_odometry(&odom(0.5, 0.5, 1)))
         .encoding(Encoding::APPLICATION_CDR)
+        .congestion_control(CongestionControl::Block)
         .await
         .map_err(|e| anyhow!("{e}"))?;
-    let mut pts = Vec::new();
-    for i in 0..20 {
-        for j in 0..20 {
-            for k in 0..3 {
-                // Cell-centred so no point sits on a voxel boundary.
-                pts.push([4.01 + i as f32 * 0.02, 4.01 + j as f32 * 0.02, 0.21 + k as f32 * 0.2]);
-            }
-        }
-    }
+    // Cell-centred so no point sits on a voxel boundary.
+    let mut pts = obstacle_box(4.0, 4.0, 20, 3);
     pts.push([4.0, 4.0, 0.0]); // floor: not an obstacle
     robot
         .put(
@@ -122,6 +66,7 @@ async fn robot_streams_gets_its_plan_and_is_lost_when_its_token_drops() -> Resul
             encode_point_cloud2_xyz(&header("map", 1), &pts),
         )
         .encoding(Encoding::APPLICATION_CDR)
+        .congestion_control(CongestionControl::Block)
         .await
         .map_err(|e| anyhow!("{e}"))?;
     let site = poll(
@@ -181,6 +126,7 @@ async fn robot_streams_gets_its_plan_and_is_lost_when_its_token_drops() -> Resul
                 encode_odometry(&odom(w.x, w.y, 2 + n as i32)),
             )
             .encoding(Encoding::APPLICATION_CDR)
+            .congestion_control(CongestionControl::Block)
             .await
             .map_err(|e| anyhow!("{e}"))?;
     }

@@ -6,6 +6,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::{KeyError, KeySpace, Stream, parse_robot_leaf, validate_name, validate_path};
+use crate::ros::type_hash;
 use crate::ros::type_name::{DDS_LASER_SCAN, DDS_ODOMETRY, DDS_POINT_CLOUD2};
 
 /// How a fleet's robots name their keys; selectable per fleet in the daemon config as
@@ -131,6 +132,53 @@ impl Ros2Mapping {
     }
 }
 
+impl Ros2Mapping {
+    /// The robot and data stream (odometry, cloud, scan) of a key received on one of
+    /// [`subscriptions`](Self::subscriptions); native keys are checked against `keys`' prefix and fleet too.
+    /// Liveliness keys and keys of other layouts give `None`.
+    pub fn classify(&self, keys: &KeySpace, key: &str) -> Option<(String, Stream)> {
+        match self {
+            Self::Native => keys.robot_of(key),
+            Self::BridgeRos2dds { .. } | Self::RmwZenoh { .. } => self.robot_of(key),
+        }
+        .filter(|(_, s)| *s != Stream::Alive)
+    }
+
+    /// The key `robot` publishes `stream` on in this layout (what a robot, simulator or test puts to); rmw_zenoh
+    /// keys carry the Jazzy type hash. Liveliness is native only (`None` for the ROS 2 layouts).
+    pub fn robot_key(&self, keys: &KeySpace, robot: &str, stream: Stream) -> Result<Option<String>, KeyError> {
+        validate_name("robot name", robot)?;
+        let topic = TOPICS.iter().find(|(_, s, _)| *s == stream);
+        Ok(match (self, topic) {
+            (Self::Native, _) => Some(match stream {
+                Stream::Odom => keys.odom(robot)?,
+                Stream::Cloud => keys.cloud(robot)?,
+                Stream::Scan => keys.scan(robot)?,
+                Stream::Alive => keys.alive(robot)?,
+            }),
+            (_, None) => None,
+            (Self::BridgeRos2dds { namespace }, Some((topic, _, _))) => Some(match namespace_of(namespace) {
+                Some(ns) => format!("{ns}/{robot}/{topic}"),
+                None => format!("{robot}/{topic}"),
+            }),
+            (Self::RmwZenoh { domain }, Some((topic, stream, dds))) => {
+                let hash = match stream {
+                    Stream::Odom => type_hash::ODOMETRY,
+                    Stream::Cloud => type_hash::POINT_CLOUD2,
+                    _ => type_hash::LASER_SCAN,
+                };
+                Some(format!("{domain}/{robot}/{topic}/{dds}/{hash}"))
+            }
+        })
+    }
+
+    /// True when robots announce themselves with a SHIFT liveliness token (native); ROS 2 robots are alive
+    /// while their topics are heard.
+    pub fn has_liveliness(&self) -> bool {
+        matches!(self, Self::Native)
+    }
+}
+
 /// Robot and stream of `{robot}/{topic}`, checking the DDS type when given.
 fn robot_stream(robot: &str, topic: &str, dds: Option<&str>) -> Option<(String, Stream)> {
     validate_name("robot name", robot).ok()?;
@@ -174,6 +222,55 @@ mod tests {
         assert_eq!(m.robot_of("shift/default/robots/r1/plan"), None);
         assert_eq!(m.robot_of("shift/default/bots/r1/odom"), None);
         assert_eq!(m.robot_of("r1/odom"), None);
+    }
+
+    #[test]
+    fn classify_checks_the_native_key_space_and_skips_liveliness() {
+        let acme = KeySpace::new("acme", "north").expect("valid");
+        let n = Ros2Mapping::Native;
+        assert_eq!(
+            n.classify(&acme, "acme/north/robots/r1/scan"),
+            Some(("r1".into(), Stream::Scan))
+        );
+        assert_eq!(n.classify(&acme, "shift/default/robots/r1/scan"), None);
+        assert_eq!(n.classify(&acme, "acme/north/robots/r1/alive"), None);
+        assert!(n.has_liveliness());
+        let b = Ros2Mapping::BridgeRos2dds { namespace: None };
+        assert_eq!(b.classify(&acme, "bot1/points"), Some(("bot1".into(), Stream::Cloud)));
+        assert!(!b.has_liveliness());
+        assert!(!Ros2Mapping::RmwZenoh { domain: 0 }.has_liveliness());
+    }
+
+    #[test]
+    fn robot_keys_parse_back_in_every_layout() {
+        let keys = ks();
+        for m in [
+            Ros2Mapping::Native,
+            Ros2Mapping::BridgeRos2dds { namespace: None },
+            Ros2Mapping::BridgeRos2dds {
+                namespace: Some("/a/b/".into()),
+            },
+            Ros2Mapping::RmwZenoh { domain: 42 },
+        ] {
+            for stream in [Stream::Odom, Stream::Cloud, Stream::Scan] {
+                let key = m.robot_key(&keys, "bot1", stream).expect("valid").expect("a key");
+                assert_eq!(m.classify(&keys, &key), Some(("bot1".into(), stream)), "{m:?} {key}");
+            }
+            assert_eq!(
+                m.robot_key(&keys, "bot1", Stream::Alive).expect("valid").is_some(),
+                m.has_liveliness()
+            );
+            assert!(m.robot_key(&keys, "a/b", Stream::Odom).is_err());
+        }
+        let scan = Ros2Mapping::RmwZenoh { domain: 0 }
+            .robot_key(&keys, "bot1", Stream::Scan)
+            .expect("valid");
+        assert_eq!(
+            scan.as_deref(),
+            Some(
+                "0/bot1/scan/sensor_msgs::msg::dds_::LaserScan_/RIHS01_64c191398013af96509d518dac71d5164f9382553fce5c1f8cca5be7924bd828"
+            )
+        );
     }
 
     #[test]

@@ -122,7 +122,7 @@ pub fn now_ms() -> u64 {
         .map_or(0, |d| d.as_millis() as u64)
 }
 
-/// Starts the engine thread.
+/// Starts the engine thread. With `overlay`, plan jobs see their site's live obstacle points.
 pub fn spawn(
     engine: Engine,
     store: Arc<Store>,
@@ -130,13 +130,14 @@ pub fn spawn(
     events: broadcast::Sender<PlanEvent>,
     publisher: Option<PlanPublisher>,
     live: Arc<LiveMaps>,
+    overlay: Option<Arc<LiveMaps>>,
     runtime: tokio::runtime::Handle,
     recorder: Option<crate::record::Recorder>,
 ) -> std::io::Result<(BrainHandle, std::thread::JoinHandle<()>)> {
     let (tx, rx) = mpsc::channel(INBOX);
     let (running_tx, running_rx) = watch::channel(0);
     let checks = CheckRunner::new(runtime.clone(), tx.clone(), live.clone());
-    let jobs = JobRunner::new(runtime, tx.clone());
+    let jobs = JobRunner::new(runtime, tx.clone(), overlay);
     let brain = Brain {
         engine,
         store,

@@ -78,6 +78,8 @@ pub struct JobsConfig {
     pub queue_capacity: usize,
     /// Seconds running plans get to finish on shutdown.
     pub shutdown_grace_s: u64,
+    /// Mark the site's live obstacle points occupied in a job's grid (where the static map is free).
+    pub live_overlay: bool,
 }
 
 impl Default for JobsConfig {
@@ -86,6 +88,7 @@ impl Default for JobsConfig {
             workers: 0,
             queue_capacity: 64,
             shutdown_grace_s: 10,
+            live_overlay: true,
         }
     }
 }
@@ -153,5 +156,16 @@ mod tests {
         let c = Config::parse("[jobs]\nworkers = 3\n[http]\nauth_token = \"s3\"").expect("parses");
         assert_eq!(c.jobs.effective_workers(), 3);
         assert_eq!(c.http.auth_token, "s3");
+        let c = Config::parse("[zenoh]\nmapping = { kind = \"rmw_zenoh\", domain = 7 }").expect("rmw_zenoh");
+        assert_eq!(c.zenoh.mapping, shift_proto::keys::Ros2Mapping::RmwZenoh { domain: 7 });
+        let c = Config::parse("[zenoh.mapping]\nkind = \"bridge_ros2dds\"\nnamespace = \"site1\"").expect("bridge");
+        assert_eq!(
+            c.zenoh.mapping,
+            shift_proto::keys::Ros2Mapping::BridgeRos2dds {
+                namespace: Some("site1".into())
+            }
+        );
+        assert!(Config::parse("[zenoh]\nmapping = { kind = \"ros1\" }").is_err());
+        assert!(Config::parse("[zenoh]\nmapping = { kind = \"rmw_zenoh\", domian = 1 }").is_err());
     }
 }

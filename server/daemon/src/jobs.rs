@@ -15,6 +15,7 @@ use shift_proto::RegionReady;
 use tokio::sync::mpsc;
 
 use crate::brain::Msg;
+use crate::fleet::live::LiveMaps;
 use crate::plan_doc::to_document;
 
 /// Spawns jobs and holds their cancel flags.
@@ -24,6 +25,7 @@ pub struct JobRunner {
     to_engine: mpsc::Sender<Msg>,
     cancels: HashMap<String, Arc<AtomicBool>>,
     interrupt: Arc<AtomicBool>,
+    overlay: Option<Arc<LiveMaps>>,
 }
 
 struct Monitor {
@@ -52,23 +54,29 @@ impl PlanMonitor for Monitor {
 }
 
 impl JobRunner {
-    /// A runner spawning on `runtime`'s blocking pool and reporting to the engine thread.
-    pub fn new(runtime: tokio::runtime::Handle, to_engine: mpsc::Sender<Msg>) -> Self {
+    /// A runner spawning on `runtime`'s blocking pool and reporting to the engine thread; with `overlay`,
+    /// each job sees its site's live obstacle points (see [`live_overlay`]).
+    pub fn new(runtime: tokio::runtime::Handle, to_engine: mpsc::Sender<Msg>, overlay: Option<Arc<LiveMaps>>) -> Self {
         Self {
             runtime,
             to_engine,
             cancels: HashMap::new(),
             interrupt: Arc::new(AtomicBool::new(false)),
+            overlay,
         }
     }
 
-    /// Starts a job.
-    pub fn start(&mut self, job: PlanJob) {
+    /// Starts a job (its live overlay is read on the blocking pool, not on the engine thread).
+    pub fn start(&mut self, mut job: PlanJob) {
         let cancel = Arc::new(AtomicBool::new(false));
         self.cancels.insert(job.plan_id.clone(), cancel.clone());
         let interrupt = self.interrupt.clone();
         let to_engine = self.to_engine.clone();
+        let overlay = self.overlay.clone();
         self.runtime.spawn_blocking(move || {
+            if let Some(live) = overlay {
+                job.overlay = live_overlay(&live, &job.request.site);
+            }
             let plan_id = job.plan_id.clone();
             let mut monitor = Monitor {
                 plan_id: plan_id.clone(),
@@ -120,6 +128,27 @@ impl JobRunner {
     pub fn interrupt_all(&self) {
         self.interrupt.store(true, Ordering::Relaxed);
     }
+}
+
+/// The site's live obstacle points as (x, y) in the map frame, metres (empty without a live map). Every point
+/// of the live map is already an obstacle: the height band was applied when it was ingested.
+pub fn live_overlay(live: &LiveMaps, site: &str) -> Vec<[f64; 2]> {
+    let Some(site_live) = live.get(site) else {
+        return Vec::new();
+    };
+    let Ok(map) = site_live.map.read() else {
+        return Vec::new();
+    };
+    let points: Vec<[f64; 2]> = map
+        .tree()
+        .flatten()
+        .iter()
+        .map(|p| [f64::from(p.x), f64::from(p.y)])
+        .collect();
+    drop(map);
+    tracing::debug!(site, points = points.len(), "live overlay for a plan job");
+    metrics::histogram!("shift_plan_overlay_points").record(points.len() as f64);
+    points
 }
 
 /// Each region's cover waypoints in visiting order, grouped from the finished path.

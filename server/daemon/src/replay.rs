@@ -215,7 +215,10 @@ pub fn into_engine(rec: &Recorded, out: &mut dyn Write, check: bool) -> Result<E
         if check && seq != *last_seq + 1 {
             mismatch(
                 &mut report,
-                format!("run {run}: inputs {}..{seq} are missing (dropped while recording)", *last_seq + 1),
+                format!(
+                    "run {run}: inputs {}..{seq} are missing (dropped while recording)",
+                    *last_seq + 1
+                ),
             );
         }
         *last_seq = seq;
@@ -257,7 +260,10 @@ pub fn into_engine(rec: &Recorded, out: &mut dyn Write, check: bool) -> Result<E
     if check {
         for &(run, seq) in rec.decisions.keys() {
             if !rec.inputs.contains_key(&(run, seq)) {
-                mismatch(&mut report, format!("run {run} seq {seq}: decisions recorded without their input"));
+                mismatch(
+                    &mut report,
+                    format!("run {run} seq {seq}: decisions recorded without their input"),
+                );
             }
         }
     }
@@ -379,7 +385,10 @@ pub fn run_cli(args: ReplayArgs) -> Result<()> {
         tokio::time::sleep(Duration::from_millis(500)).await;
         let n = onto_zenoh(&rec, &session, args.speed).await?;
         eprintln!("{n} messages and token changes replayed onto zenoh");
-        session.close().await.map_err(|e| anyhow!("closing the zenoh session: {e}"))?;
+        session
+            .close()
+            .await
+            .map_err(|e| anyhow!("closing the zenoh session: {e}"))?;
         Ok(())
     })
 }

@@ -168,7 +168,7 @@ impl Store {
 fn write_plan(txn: &redb::WriteTransaction, rec: &PlanRecord) -> Result<()> {
     let bytes = serde_json::to_vec(rec)?;
     {
-            let mut plans = txn.open_table(PLANS)?;
+        let mut plans = txn.open_table(PLANS)?;
         let previous = plans
             .get(rec.plan_id.as_str())?
             .map(|g| decode::<PlanRecord>("plan", &rec.plan_id, g.value()))
@@ -189,7 +189,7 @@ fn write_plan(txn: &redb::WriteTransaction, rec: &PlanRecord) -> Result<()> {
             let n = last.map_or(0, |n| n + 1);
             history.insert((rec.plan_id.as_str(), n), serde_json::to_vec(&t)?.as_slice())?;
         }
-        }
+    }
     Ok(())
 }
 
@@ -319,6 +319,10 @@ mod tests {
         assert_eq!(store.plans().expect("plans")[0].version, 3);
         let expected = c2.apply(&c1.apply(&doc).expect("c1 applies")).expect("c2 applies");
         assert_eq!(store.current("p-1").expect("read"), Some(expected));
-        assert_eq!(store.result("p-1").expect("read"), Some(doc), "the computed version is kept");
+        assert_eq!(
+            store.result("p-1").expect("read"),
+            Some(doc),
+            "the computed version is kept"
+        );
     }
 }

@@ -497,7 +497,9 @@ impl Engine {
             return;
         }
         let Some(r) = self.robots.get_mut(robot) else { return };
-        let (Some(a), Some(pose)) = (&r.assignment, r.pose) else { return };
+        let (Some(a), Some(pose)) = (&r.assignment, r.pose) else {
+            return;
+        };
         if r.watch.in_flight {
             r.watch.pending = true;
             return;
@@ -506,7 +508,9 @@ impl Engine {
         if rec.status != PlanStatus::Active {
             return;
         }
-        let Some(site) = self.sites.get(&rec.request.site) else { return };
+        let Some(site) = self.sites.get(&rec.request.site) else {
+            return;
+        };
         let spec = rec.request.robot;
         r.watch.in_flight = true;
         r.watch.pending = false;
@@ -742,6 +746,7 @@ impl Engine {
                         grid,
                         request: rec.request.clone(),
                         options,
+                        overlay: Vec::new(),
                     }));
                 }
                 Err(e) => {

@@ -24,6 +24,28 @@ pub struct PlanJob {
     pub request: PlanRequest,
     /// Its parsed options.
     pub options: ParsedOptions,
+    /// Live obstacle points (x, y in the map frame, metres) to mark occupied where the static map is free:
+    /// the site's live map when the job started, filled in by the daemon; empty = the static map alone.
+    pub overlay: Vec<[f64; 2]>,
+}
+
+/// Marks the cells holding `points` (x, y map frame, metres) occupied where `grid` says free, except within
+/// `keep_clear_m` of `keep_clear_at` (the robot at its start, which another robot's sensor may have seen).
+/// Points off the grid or not finite are ignored. Returns how many cells changed.
+pub fn apply_overlay(grid: &mut OccupancyGrid, points: &[[f64; 2]], keep_clear_at: Point2, keep_clear_m: f64) -> usize {
+    let mut changed = 0;
+    for p in points {
+        let q = Point2::new(p[0], p[1]);
+        if !(q.x.is_finite() && q.y.is_finite()) || (q - keep_clear_at).norm() < keep_clear_m {
+            continue;
+        }
+        let Some(c) = grid.geometry.locate(q) else { continue };
+        if grid.state(c) == CellState::Free {
+            grid.set(c, CellState::Occupied);
+            changed += 1;
+        }
+    }
+    changed
 }
 
 /// The planner's attribute map from wire blobs (`POST /v1/plans` `attribute`, `shiftd plan --attribute x.json`).
@@ -55,9 +77,11 @@ pub struct JobResult {
 
 /// Computes the plan and its speed profile (RFICP with the request's attribute blobs; uniform without).
 /// With a region polygon, cells whose centre lies outside it are treated as unknown (neither covered nor
-/// driven through), so the whole plan stays inside the polygon.
+/// driven through), so the whole plan stays inside the polygon. The job's live overlay marks free cells
+/// occupied ([`apply_overlay`]; points within two robot radii plus a cell of the start are left out, so a
+/// robot seen by another robot does not block its own start).
 pub fn run_job(job: &PlanJob, monitor: &mut dyn PlanMonitor) -> shift_planner::Result<JobResult> {
-    let grid = match &job.request.region {
+    let mut grid = match &job.request.region {
         None => (*job.grid).clone(),
         Some(poly) => {
             let mut g = (*job.grid).clone();
@@ -75,6 +99,10 @@ pub fn run_job(job: &PlanJob, monitor: &mut dyn PlanMonitor) -> shift_planner::R
         tool_width_m: r.tool_width,
     };
     let start = Point2::new(job.request.start[0], job.request.start[1]);
+    if !job.overlay.is_empty() {
+        let keep_clear_m = 2.0 * r.radius + grid.geometry.resolution;
+        apply_overlay(&mut grid, &job.overlay, start, keep_clear_m);
+    }
     let space = CoverageSpace::new(grid, robot, start)?;
     let params = PlanParams {
         decomposition: job.options.decomposition,
@@ -136,6 +164,7 @@ mod tests {
             grid,
             request,
             options,
+            overlay: Vec::new(),
         };
         let res = run_job(&job, &mut NoMonitor).expect("plans");
         let m = res.profile.metrics;
@@ -149,6 +178,74 @@ mod tests {
                 "{}",
                 w.speed_mps
             );
+        }
+    }
+
+    fn open_request(start: [f64; 2]) -> PlanRequest {
+        PlanRequest {
+            site: "s".into(),
+            start,
+            robot: RobotSpec {
+                radius: 0.1,
+                tool_width: 0.2,
+                v_min: 0.1,
+                v_max: 1.0,
+                a_max: 0.5,
+            },
+            attribute: None,
+            region: None,
+            options: None,
+        }
+    }
+
+    #[test]
+    fn live_overlay_obstacle_is_avoided() {
+        // 4 m × 3 m open room; a 0.6 m × 0.6 m obstacle seen by a robot in the middle (5 cm points).
+        let g = GridGeometry::new(40, 30, 0.1, Point2::new(0.0, 0.0)).expect("geometry");
+        let grid = Arc::new(OccupancyGrid::filled(g, CellState::Free));
+        let mut overlay = Vec::new();
+        for i in 0..12 {
+            for j in 0..12 {
+                overlay.push([1.725 + i as f64 * 0.05, 1.225 + j as f64 * 0.05]);
+            }
+        }
+        overlay.push([f64::NAN, 1.0]); // ignored
+        overlay.push([50.0, 1.0]); // off the grid: ignored
+        overlay.push([0.52, 0.5]); // next to the start: the robot itself, left out
+        let request = open_request([0.5, 0.5]);
+        let options = validate(&request, &grid).expect("valid");
+        let mut job = PlanJob {
+            plan_id: "p-1".into(),
+            grid: grid.clone(),
+            request,
+            options,
+            overlay: Vec::new(),
+        };
+        let near_block = |p: Point2| p.x > 1.7 && p.x < 2.3 && p.y > 1.2 && p.y < 1.8;
+        let bare = run_job(&job, &mut NoMonitor).expect("plans without the overlay");
+        assert!(
+            bare.profile.waypoints.iter().any(|w| near_block(w.waypoint.position)),
+            "without the overlay the plan sweeps the block's area"
+        );
+        job.overlay = overlay;
+        let res = run_job(&job, &mut NoMonitor).expect("plans with the overlay");
+        let mut overlaid = (*grid).clone();
+        let changed = apply_overlay(&mut overlaid, &job.overlay, Point2::new(0.5, 0.5), 0.3);
+        assert_eq!(changed, 36, "6 × 6 cells of 0.1 m");
+        assert_eq!(
+            res.space.grid.cells, overlaid.cells,
+            "the job planned on the overlaid grid"
+        );
+        let m = res.profile.metrics;
+        assert_eq!(m.collisions, 0, "{m:?}");
+        assert!(m.coverage_pct >= 99.0, "{m:?}");
+        // Every path point keeps the robot radius from every overlaid cell centre (1.75–2.25, 1.25–1.75).
+        for w in &res.profile.waypoints {
+            let p = w.waypoint.position;
+            let dx = (p.x - 2.0).abs() - 0.25;
+            let dy = (p.y - 1.5).abs() - 0.25;
+            let d = dx.max(0.0).hypot(dy.max(0.0));
+            assert!(d >= 0.1 - 1e-6, "{p:?} is {d} m from the obstacle");
         }
     }
 }

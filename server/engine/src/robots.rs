@@ -237,7 +237,15 @@ mod tests {
         let mut a = Assignment::new("p-1".into(), doc(&pts));
         a.index = 4;
         // waypoints[1..3) (two) replaced by three.
-        let new: Vec<(f64, f64)> = vec![(0.0, 0.0), (0.5, 0.5), (1.0, 0.6), (1.5, 0.5), (3.0, 0.0), (4.0, 0.0), (5.0, 0.0)];
+        let new: Vec<(f64, f64)> = vec![
+            (0.0, 0.0),
+            (0.5, 0.5),
+            (1.0, 0.6),
+            (1.5, 0.5),
+            (3.0, 0.0),
+            (4.0, 0.0),
+            (5.0, 0.0),
+        ];
         a.corrected(doc(&new), 1, 3, 3);
         assert_eq!(a.index, 5, "still at (4, 0)");
         assert_eq!(a.doc.waypoints[a.index].x, 4.0);

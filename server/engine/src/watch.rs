@@ -10,9 +10,9 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 use shift_planner::correct::{self, CorrectParams, RepairKind, TimedWaypoint, World};
-use shift_planner::speed::SpeedLimits;
 use shift_planner::geom::Point2;
 use shift_planner::map::ikd_tree::IkdTree;
+use shift_planner::speed::SpeedLimits;
 use shift_proto::{CorrectionReason, PlanDocument, WaypointDoc};
 
 use crate::robots::Pose2;
@@ -227,7 +227,12 @@ mod tests {
         let cells: Vec<String> = (0..w * h)
             .map(|i| {
                 let (r, c) = (i / w, i % w);
-                if r == 0 || c == 0 || r + 1 == h || c + 1 == w { "100" } else { "0" }.to_owned()
+                if r == 0 || c == 0 || r + 1 == h || c + 1 == w {
+                    "100"
+                } else {
+                    "0"
+                }
+                .to_owned()
             })
             .collect();
         let text = format!(
@@ -288,7 +293,11 @@ mod tests {
         let mut pts = Vec::new();
         for i in 0..5 {
             for j in 0..5 {
-                pts.push(Point3::new((cx - 0.1 + 0.05 * i as f64) as f32, (cy - 0.1 + 0.05 * j as f64) as f32, 0.0));
+                pts.push(Point3::new(
+                    (cx - 0.1 + 0.05 * i as f64) as f32,
+                    (cy - 0.1 + 0.05 * j as f64) as f32,
+                    0.0,
+                ));
             }
         }
         let mut t = IkdTree::new(IkdParams::default()).expect("params");

@@ -2,6 +2,8 @@
 //! scouting off — never all interfaces by default (ECOSYSTEM.md).
 
 use serde::Deserialize;
+use shift_engine::PoseHistoryParams;
+use shift_proto::keys::Ros2Mapping;
 
 /// `[zenoh]` of the config file.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
@@ -38,6 +40,23 @@ pub struct ZenohConfig {
     /// Points this close to an obstacle of the static map are that obstacle seen again, not new ones
     /// (metres; 0 keeps them all).
     pub known_tolerance_m: f64,
+    /// How this fleet's robots name their keys: `{kind = "native"}` (DESIGN §5.4 under prefix/fleet),
+    /// `{kind = "bridge_ros2dds", namespace = "…"}` or `{kind = "rmw_zenoh", domain = 0}`.
+    pub mapping: Ros2Mapping,
+    /// ROS 2 mappings have no SHIFT liveliness token: a robot is alive from its first message and lost after
+    /// this many seconds without one, seconds.
+    pub robot_timeout_s: u64,
+    /// Odometry kept per robot to place scans and robot-frame clouds at their stamps, seconds.
+    pub pose_history_s: f64,
+    /// A scan stamped up to this long after the newest pose (or before the oldest) takes that end pose;
+    /// beyond, it is dropped and counted, milliseconds.
+    pub scan_stamp_tolerance_ms: u64,
+    /// Laser position in the robot frame (x forward, y left), metres.
+    pub scan_offset_x_m: f64,
+    /// See `scan_offset_x_m`.
+    pub scan_offset_y_m: f64,
+    /// Laser heading in the robot frame, radians counter-clockwise.
+    pub scan_offset_yaw_rad: f64,
 }
 
 impl Default for ZenohConfig {
@@ -58,6 +77,29 @@ impl Default for ZenohConfig {
             horizon_s: 600,
             cloud_queue: 4,
             known_tolerance_m: 0.1,
+            mapping: Ros2Mapping::Native,
+            robot_timeout_s: 10,
+            pose_history_s: 5.0,
+            scan_stamp_tolerance_ms: 100,
+            scan_offset_x_m: 0.0,
+            scan_offset_y_m: 0.0,
+            scan_offset_yaw_rad: 0.0,
+        }
+    }
+}
+
+impl ZenohConfig {
+    /// The per-robot pose history these settings ask for (at most 100 poses a second of history).
+    pub fn pose_history(&self) -> PoseHistoryParams {
+        let span_s = if self.pose_history_s.is_finite() {
+            self.pose_history_s.clamp(0.1, 600.0)
+        } else {
+            5.0
+        };
+        PoseHistoryParams {
+            span_ns: (span_s * 1e9) as i64,
+            max_poses: ((span_s * 100.0) as usize).max(16),
+            tolerance_ns: i64::try_from(self.scan_stamp_tolerance_ms.min(3_600_000)).unwrap_or(0) * 1_000_000,
         }
     }
 }

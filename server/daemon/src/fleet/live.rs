@@ -15,7 +15,7 @@ pub struct SiteLive {
     /// The map.
     pub map: RwLock<LiveMap>,
     recent_ms: Mutex<VecDeque<u64>>,
-    /// Clouds dropped for this site (queue overflow, malformed, no pose to transform with).
+    /// Clouds and scans dropped for this site (queue overflow, malformed, no map, no pose at their stamp).
     pub dropped: AtomicU64,
     /// Last horizon pass, milliseconds since the Unix epoch.
     pub last_expire_ms: AtomicU64,

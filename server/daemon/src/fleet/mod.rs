@@ -1,29 +1,34 @@
-//! The fleet over Zenoh (DESIGN §5.4): one session per daemon; odometry → engine, clouds → ingest thread →
-//! live site map, liveliness tokens → robot registry, plans out (JSON on the plan key, nav_msgs/Path CDR on
+//! The fleet over Zenoh (DESIGN §5.4): one session per daemon; robot data on the keys of the fleet's mapping
+//! (`subscribe`: native, zenoh-bridge-ros2dds or rmw_zenoh): odometry → engine, clouds and scans → ingest
+//! thread → live site map; liveliness tokens (native) or heard topics (ROS 2, `presence`) → robot registry, plans out (JSON on the plan key, nav_msgs/Path CDR on
 //! the plan_path key) and a queryable serving each robot's current plan to robots that (re)connect.
 
 pub mod config;
 pub mod ingest;
 pub mod live;
+pub mod presence;
+pub mod scan;
+pub mod subscribe;
 
 use std::sync::Arc;
-use std::time::Instant;
+use std::time::Duration;
 
 use anyhow::{Result, anyhow};
-use shift_engine::{Event, LiveMapParams, Pose2};
-use shift_proto::{CorrectionDoc, PlanDocument};
+use shift_engine::{Event, LiveMapParams};
 use shift_proto::keys::{KeySpace, Stream};
-use shift_proto::ros::odometry::decode_odom_payload;
 use shift_proto::ros::path::encode_path;
 use shift_proto::ros::{Header, Time};
+use shift_proto::{CorrectionDoc, PlanDocument};
 use tokio::task::JoinHandle;
 use tokio_util::sync::CancellationToken;
 use zenoh::bytes::Encoding;
+use zenoh::qos::CongestionControl;
 use zenoh::sample::SampleKind;
 
 use self::config::ZenohConfig;
-use self::ingest::{Ingest, RawCloud};
+use self::ingest::{Ingest, IngestSettings};
 use self::live::LiveMaps;
+use self::scan::SensorOffset;
 use crate::brain::{BrainHandle, Msg};
 use crate::views::Views;
 
@@ -73,7 +78,10 @@ impl PlanPublisher {
                 Ok(j) => j,
                 Err(e) => return tracing::error!("plan JSON: {e}"),
             };
-            if let Err(e) = session.put(&plan_key, json).encoding(Encoding::APPLICATION_JSON).await {
+            // Block, not drop, when the link is congested: a plan is worth the wait (this task is the one
+            // waiting, never the engine).
+            let put = session.put(&plan_key, json).encoding(Encoding::APPLICATION_JSON);
+            if let Err(e) = put.congestion_control(CongestionControl::Block).await {
                 tracing::warn!(robot, "publishing the plan: {e}");
             }
             let header = Header {
@@ -81,7 +89,8 @@ impl PlanPublisher {
                 frame_id: doc.frame.clone(),
             };
             let cdr = encode_path(&header, &path_poses(&doc));
-            if let Err(e) = session.put(&path_key, cdr).encoding(Encoding::APPLICATION_CDR).await {
+            let put = session.put(&path_key, cdr).encoding(Encoding::APPLICATION_CDR);
+            if let Err(e) = put.congestion_control(CongestionControl::Block).await {
                 tracing::warn!(robot, "publishing the ROS path: {e}");
             }
         });
@@ -165,15 +174,19 @@ impl Fleet {
             horizon_ms: config.horizon_s.saturating_mul(1000),
             known_tolerance_m: config.known_tolerance_m as f32,
         };
-        let ingest = Arc::new(Ingest::new(
-            config.cloud_queue,
-            config.site.clone(),
-            config.map_frame.clone(),
+        let settings = IngestSettings {
+            capacity: config.cloud_queue,
+            site: config.site.clone(),
+            map_frame: config.map_frame.clone(),
             params,
-            views.clone(),
-            live,
-            Some(brain.clone()),
-        ));
+            history: config.pose_history(),
+            scan_offset: SensorOffset {
+                x_m: config.scan_offset_x_m,
+                y_m: config.scan_offset_y_m,
+                yaw_rad: config.scan_offset_yaw_rad,
+            },
+        };
+        let ingest = Arc::new(Ingest::new(settings, views.clone(), live, Some(brain.clone())));
         let worker = ingest.clone();
         let ingest_thread = std::thread::Builder::new()
             .name("ingest".into())
@@ -182,56 +195,19 @@ impl Fleet {
         let mut tasks = Vec::new();
         let z = |e: zenoh::Error| anyhow!("zenoh: {e}");
 
-        // Odometry → engine (lossy under overload: the next pose supersedes a dropped one).
-        let sub = session.declare_subscriber(keys.all_odom()).await.map_err(z)?;
-        let (k, b, s) = (keys.clone(), brain.clone(), stop.clone());
-        tasks.push(tokio::spawn(async move {
-            loop {
-                let Some(sample) = next_or_stop(&s, sub.recv_async()).await else {
-                    break;
-                };
-                let Some((robot, Stream::Odom)) = k.robot_of(sample.key_expr().as_str()) else {
-                    continue;
-                };
-                let encoding = sample.encoding().to_string();
-                match decode_odom_payload(&sample.payload().to_bytes(), Some(&encoding)) {
-                    Ok(p) => {
-                        let pose = Pose2 {
-                            x: p.x,
-                            y: p.y,
-                            yaw: p.yaw,
-                            stamp_ns: p.stamp_ns,
-                        };
-                        if b.try_tell(Msg::event(Event::RobotPose { robot, pose })).is_err() {
-                            metrics::counter!("shift_odom_dropped_total", "reason" => "engine_busy").increment(1);
-                        }
-                    }
-                    Err(e) => {
-                        metrics::counter!("shift_odom_dropped_total", "reason" => "malformed").increment(1);
-                        tracing::debug!(robot, "odometry dropped: {e}");
-                    }
-                }
-            }
-        }));
-
-        // Clouds → ingest queues.
-        let sub = session.declare_subscriber(keys.all_cloud()).await.map_err(z)?;
-        let (k, ing, s) = (keys.clone(), ingest.clone(), stop.clone());
-        tasks.push(tokio::spawn(async move {
-            loop {
-                let Some(sample) = next_or_stop(&s, sub.recv_async()).await else {
-                    break;
-                };
-                let Some((robot, Stream::Cloud)) = k.robot_of(sample.key_expr().as_str()) else {
-                    continue;
-                };
-                ing.push(RawCloud {
-                    robot,
-                    bytes: sample.payload().to_bytes().into_owned(),
-                    received: Instant::now(),
-                });
-            }
-        }));
+        // Odometry, clouds and scans on the keys of the fleet's mapping (native, bridge or rmw_zenoh).
+        tasks.extend(
+            subscribe::data_subscriptions(
+                &session,
+                keys.clone(),
+                &config.mapping,
+                Duration::from_secs(config.robot_timeout_s.max(1)),
+                brain.clone(),
+                ingest.clone(),
+                &stop,
+            )
+            .await?,
+        );
 
         // Liveliness: tokens present now (history) and every change after.
         let sub = session

@@ -159,7 +159,10 @@ fn a_proposal_becomes_the_next_version_and_stale_ones_are_dropped() {
     let k = &cs[0];
     assert_eq!((k.base_version, k.version, k.from, k.to), (1, 2, 2, 4));
     assert_eq!(k.compute_us, 250);
-    assert!(c.iter().any(|c| matches!(c, Command::PublishCorrection(x) if x.version == 2)));
+    assert!(
+        c.iter()
+            .any(|c| matches!(c, Command::PublishCorrection(x) if x.version == 2))
+    );
     assert!(
         c.iter()
             .any(|c| matches!(c, Command::Publish(PlanEvent::Correction(x)) if x.version == 2))
