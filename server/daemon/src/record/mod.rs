@@ -378,9 +378,11 @@ impl WriterThread {
                 Err(RecvTimeoutError::Timeout) => {}
             }
             if !self.grid_every.is_zero() && last_grid.is_none_or(|t| t.elapsed() >= self.grid_every) {
-                last_grid = Some(Instant::now());
-                if let Err(e) = self.grids() {
-                    tracing::warn!("recording the occupancy grids: {e:#}");
+                match self.grids() {
+                    // The first grid comes as soon as a site is known.
+                    Ok(0) => {}
+                    Ok(_) => last_grid = Some(Instant::now()),
+                    Err(e) => tracing::warn!("recording the occupancy grids: {e:#}"),
                 }
             }
             let housekeeping = if last_flush.elapsed() >= FLUSH_EVERY {
@@ -393,7 +395,12 @@ impl WriterThread {
                 tracing::error!("recording: {e:#}");
             }
         }
-        // Whatever is still queued (the Stop came after it) was written above; finish the file.
+        // Whatever is still queued (the Stop came after it) was written above. The final occupancy, then finish.
+        if !self.grid_every.is_zero()
+            && let Err(e) = self.grids()
+        {
+            tracing::warn!("recording the occupancy grids: {e:#}");
+        }
         self.files.finish()?;
         Ok(self.files.finished().to_vec())
     }
@@ -464,12 +471,13 @@ impl WriterThread {
         Ok(())
     }
 
-    /// One `foxglove.Grid` per known site.
-    fn grids(&mut self) -> Result<()> {
+    /// One `foxglove.Grid` per known site; returns how many.
+    fn grids(&mut self) -> Result<usize> {
         let sites: Vec<(String, Arc<OccupancyGrid>)> = match self.sites.lock() {
             Ok(s) => s.iter().map(|(k, v)| (k.clone(), v.clone())).collect(),
-            Err(_) => return Ok(()),
+            Err(_) => return Ok(0),
         };
+        let n = sites.len();
         for (site, grid) in sites {
             let live: Vec<(f64, f64)> = self
                 .live
@@ -489,6 +497,6 @@ impl WriterThread {
             self.files
                 .write(Kind::Grid, &channels::occupancy(&site), stamp, &serde_json::to_vec(&msg)?)?;
         }
-        Ok(())
+        Ok(n)
     }
 }
