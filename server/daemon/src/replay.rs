@@ -14,8 +14,8 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use anyhow::{Context, Result, anyhow, bail};
-use serde_json::{Value, json};
-use shift_engine::recorded::{RecordedDecisions, RecordedEngineConfig, RecordedInput, decisions_of};
+use serde_json::Value;
+use shift_engine::recorded::{Decision, RecordedDecisions, RecordedEngineConfig, RecordedInput, decisions_of};
 use shift_engine::{Engine, EngineConfig};
 use zenoh::bytes::Encoding;
 
@@ -182,6 +182,15 @@ pub struct EngineReplay {
 
 const MAX_REPORTED: usize = 20;
 
+/// One line of `--into-engine` output.
+#[derive(serde::Serialize)]
+struct DecisionLine<'a> {
+    run: u64,
+    seq: u64,
+    now_ms: u64,
+    decision: &'a Decision,
+}
+
 /// Feeds the recorded inputs through a fresh engine per daemon run and writes one JSON line per decision to
 /// `out`: `{"run", "seq", "now_ms", "decision"}`. With `check`, compares with the recorded decisions.
 pub fn into_engine(rec: &Recorded, out: &mut dyn Write, check: bool) -> Result<EngineReplay> {
@@ -214,7 +223,10 @@ pub fn into_engine(rec: &Recorded, out: &mut dyn Write, check: bool) -> Result<E
         if check && seq != *last_seq + 1 {
             mismatch(
                 &mut report,
-                format!("run {run}: inputs {}..{seq} are missing (dropped while recording)", *last_seq + 1),
+                format!(
+                    "run {run}: inputs {}..{seq} are missing (dropped while recording)",
+                    *last_seq + 1
+                ),
             );
         }
         *last_seq = seq;
@@ -232,9 +244,14 @@ pub fn into_engine(rec: &Recorded, out: &mut dyn Write, check: bool) -> Result<E
                 continue;
             }
         };
-        for d in &decisions {
-            let line = json!({"run": run, "seq": seq, "now_ms": input.now_ms, "decision": d});
-            writeln!(out, "{line}")?;
+        for decision in &decisions {
+            let line = DecisionLine {
+                run,
+                seq,
+                now_ms: input.now_ms,
+                decision,
+            };
+            writeln!(out, "{}", serde_json::to_string(&line)?)?;
             report.decisions += 1;
         }
         if check {
@@ -256,7 +273,10 @@ pub fn into_engine(rec: &Recorded, out: &mut dyn Write, check: bool) -> Result<E
     if check {
         for &(run, seq) in rec.decisions.keys() {
             if !rec.inputs.contains_key(&(run, seq)) {
-                mismatch(&mut report, format!("run {run} seq {seq}: decisions recorded without their input"));
+                mismatch(
+                    &mut report,
+                    format!("run {run} seq {seq}: decisions recorded without their input"),
+                );
             }
         }
     }
@@ -378,7 +398,10 @@ pub fn run_cli(args: ReplayArgs) -> Result<()> {
         tokio::time::sleep(Duration::from_millis(500)).await;
         let n = onto_zenoh(&rec, &session, args.speed).await?;
         eprintln!("{n} messages and token changes replayed onto zenoh");
-        session.close().await.map_err(|e| anyhow!("closing the zenoh session: {e}"))?;
+        session
+            .close()
+            .await
+            .map_err(|e| anyhow!("closing the zenoh session: {e}"))?;
         Ok(())
     })
 }

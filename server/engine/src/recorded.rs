@@ -80,7 +80,7 @@ pub enum RecordedOutcome {
     /// Computed: the document, the planner's remarks and the per-region paths.
     Planned {
         /// The plan document (version 1).
-        doc: PlanDocument,
+        doc: Box<PlanDocument>,
         /// Planner remarks.
         warnings: Vec<String>,
         /// Per-region cover paths in visiting order.
@@ -159,7 +159,7 @@ pub enum RecordedEvent {
         /// Robot id.
         robot: String,
         /// The document assigned.
-        doc: PlanDocument,
+        doc: Box<PlanDocument>,
     },
     /// [`Event::Shutdown`].
     Shutdown,
@@ -187,7 +187,7 @@ impl From<&Event> for RecordedEvent {
                 plan_id: plan_id.clone(),
                 outcome: match outcome {
                     JobOutcome::Planned { doc, warnings, regions } => RecordedOutcome::Planned {
-                        doc: (**doc).clone(),
+                        doc: Box::new((**doc).clone()),
                         warnings: warnings.clone(),
                         regions: regions.clone(),
                     },
@@ -212,7 +212,7 @@ impl From<&Event> for RecordedEvent {
             Event::AssignPlan { plan_id, robot, doc } => Self::AssignPlan {
                 plan_id: plan_id.clone(),
                 robot: robot.clone(),
-                doc: (**doc).clone(),
+                doc: Box::new((**doc).clone()),
             },
             Event::Shutdown => Self::Shutdown,
         }
@@ -244,7 +244,7 @@ impl RecordedEvent {
                 plan_id,
                 outcome: match outcome {
                     RecordedOutcome::Planned { doc, warnings, regions } => JobOutcome::Planned {
-                        doc: Arc::new(doc),
+                        doc: Arc::from(doc),
                         warnings,
                         regions,
                     },
@@ -266,7 +266,7 @@ impl RecordedEvent {
             Self::AssignPlan { plan_id, robot, doc } => Event::AssignPlan {
                 plan_id,
                 robot,
-                doc: Arc::new(doc),
+                doc: Arc::from(doc),
             },
             Self::Shutdown => Event::Shutdown,
         })

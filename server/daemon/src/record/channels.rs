@@ -177,7 +177,10 @@ mod tests {
             "RIHS01_9198cabf7da3796ae6fe19c4cb3bdd3525492988c70522628af5daa124bae2b5"
         );
         assert_eq!(Kind::of_payload(Stream::Odom, b" {\"x\":1}", ""), Some(Kind::OdomJson));
-        assert_eq!(Kind::of_payload(Stream::Odom, b"{", "application/cdr"), Some(Kind::Odometry));
+        assert_eq!(
+            Kind::of_payload(Stream::Odom, b"{", "application/cdr"),
+            Some(Kind::Odometry)
+        );
         assert_eq!(Kind::of_payload(Stream::Odom, &[0, 1, 0, 0], ""), Some(Kind::Odometry));
         assert_eq!(Kind::of_payload(Stream::Alive, b"", ""), None);
     }

@@ -419,8 +419,12 @@ impl WriterThread {
             }
             Entry::Liveliness { key, alive, log_ns } => {
                 let msg = serde_json::json!({"key": key, "alive": alive});
-                self.files
-                    .write(Kind::Liveliness, channels::LIVELINESS, log_ns, &serde_json::to_vec(&msg)?)?;
+                self.files.write(
+                    Kind::Liveliness,
+                    channels::LIVELINESS,
+                    log_ns,
+                    &serde_json::to_vec(&msg)?,
+                )?;
             }
             Entry::Input {
                 seq,
@@ -434,8 +438,12 @@ impl WriterThread {
                     now_ms,
                     event: RecordedEvent::from(&*event),
                 };
-                self.files
-                    .write(Kind::EngineInput, channels::ENGINE_INPUT, log_ns, &serde_json::to_vec(&input)?)?;
+                self.files.write(
+                    Kind::EngineInput,
+                    channels::ENGINE_INPUT,
+                    log_ns,
+                    &serde_json::to_vec(&input)?,
+                )?;
             }
             Entry::Output {
                 seq,
@@ -462,8 +470,12 @@ impl WriterThread {
                         .write(Kind::PlanDocument, channels::PLANS, log_ns, &serde_json::to_vec(&*d)?)?;
                 }
                 for s in statuses {
-                    self.files
-                        .write(Kind::PlanStatus, channels::PLAN_STATUS, log_ns, &serde_json::to_vec(&s)?)?;
+                    self.files.write(
+                        Kind::PlanStatus,
+                        channels::PLAN_STATUS,
+                        log_ns,
+                        &serde_json::to_vec(&s)?,
+                    )?;
                 }
             }
             Entry::Stop => {}
@@ -494,8 +506,12 @@ impl WriterThread {
                 .unwrap_or_default();
             let stamp = now_ns();
             let msg = grid::occupancy_grid(&grid, &live, &self.frame, stamp);
-            self.files
-                .write(Kind::Grid, &channels::occupancy(&site), stamp, &serde_json::to_vec(&msg)?)?;
+            self.files.write(
+                Kind::Grid,
+                &channels::occupancy(&site),
+                stamp,
+                &serde_json::to_vec(&msg)?,
+            )?;
         }
         Ok(n)
     }

@@ -288,7 +288,8 @@ mod tests {
                     x as u8
                 })
                 .collect();
-            w.write(Kind::PointCloud2, "shift/default/robots/r1/cloud", i, &data).expect("write");
+            w.write(Kind::PointCloud2, "shift/default/robots/r1/cloud", i, &data)
+                .expect("write");
         }
         w.finish().expect("finish");
         let files = recordings_in(&dir.path().join("rec")).expect("list");
@@ -299,7 +300,10 @@ mod tests {
             let name = f.file_name().and_then(|n| n.to_str()).expect("name");
             assert!(name.starts_with("shift-42-"), "{name}");
             let msgs = read_all(f);
-            assert_eq!(msgs[0].0, "/shift/engine/config", "every file starts with the engine config");
+            assert_eq!(
+                msgs[0].0, "/shift/engine/config",
+                "every file starts with the engine config"
+            );
             for (topic, t, _) in &msgs[1..] {
                 assert_eq!(topic, "shift/default/robots/r1/cloud");
                 seen.push(*t);
