@@ -348,6 +348,9 @@ pub struct ReplayArgs {
 
 /// Runs the command.
 pub fn run_cli(args: ReplayArgs) -> Result<()> {
+    if !(args.speed.is_finite() && args.speed > 0.0) {
+        bail!("--speed must be a positive number, got {}", args.speed);
+    }
     let files = expand(&args.files)?;
     let rec = Recorded::read(&files)?;
     if args.into_engine {

@@ -516,3 +516,48 @@ impl WriterThread {
         Ok(n)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn recorder(capacity: usize, max_bytes: usize) -> (Recorder, Receiver<Entry>) {
+        let (tx, rx) = sync_channel(capacity);
+        let r = Recorder {
+            shared: Arc::new(Shared {
+                tx,
+                run: 1,
+                seq: AtomicU64::new(0),
+                queued_bytes: Arc::new(AtomicUsize::new(0)),
+                max_queued_bytes: max_bytes,
+                dropped: AtomicU64::new(0),
+                sites: Arc::new(Mutex::new(BTreeMap::new())),
+                pending_sites: Mutex::new(Vec::new()),
+            }),
+        };
+        (r, rx)
+    }
+
+    #[test]
+    fn a_full_queue_drops_and_counts_instead_of_blocking() {
+        let (r, rx) = recorder(2, 1000);
+        r.liveliness("k", true);
+        r.liveliness("k", false);
+        r.liveliness("k", true); // full: dropped
+        assert_eq!(r.dropped(), 1);
+        // Payload bytes are capped separately from the message count.
+        drop(rx.try_recv());
+        r.ingest(Kind::PointCloud2, "k", vec![0; 2000]);
+        assert_eq!(r.dropped(), 2, "over queue_bytes");
+        r.ingest(Kind::PointCloud2, "k", vec![0; 500]);
+        assert_eq!(r.dropped(), 2);
+        assert_eq!(r.shared.queued_bytes.load(Ordering::Relaxed), 500);
+        // Engine inputs get consecutive sequence numbers even when dropped, so a replay sees the gap.
+        assert_eq!(r.engine_input(&Event::Shutdown, 5), 1);
+        assert_eq!(r.engine_input(&Event::Shutdown, 6), 2);
+        assert_eq!(r.dropped(), 4);
+        drop(rx);
+        r.liveliness("k", true);
+        assert_eq!(r.dropped(), 5, "a stopped writer counts as a drop too");
+    }
+}
