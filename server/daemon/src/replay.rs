@@ -14,8 +14,8 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use anyhow::{Context, Result, anyhow, bail};
-use serde_json::{Value, json};
-use shift_engine::recorded::{RecordedDecisions, RecordedEngineConfig, RecordedInput, decisions_of};
+use serde_json::Value;
+use shift_engine::recorded::{Decision, RecordedDecisions, RecordedEngineConfig, RecordedInput, decisions_of};
 use shift_engine::{Engine, EngineConfig};
 use zenoh::bytes::Encoding;
 
@@ -182,6 +182,15 @@ pub struct EngineReplay {
 
 const MAX_REPORTED: usize = 20;
 
+/// One line of `--into-engine` output.
+#[derive(serde::Serialize)]
+struct DecisionLine<'a> {
+    run: u64,
+    seq: u64,
+    now_ms: u64,
+    decision: &'a Decision,
+}
+
 /// Feeds the recorded inputs through a fresh engine per daemon run and writes one JSON line per decision to
 /// `out`: `{"run", "seq", "now_ms", "decision"}`. With `check`, compares with the recorded decisions.
 pub fn into_engine(rec: &Recorded, out: &mut dyn Write, check: bool) -> Result<EngineReplay> {
@@ -236,9 +245,14 @@ pub fn into_engine(rec: &Recorded, out: &mut dyn Write, check: bool) -> Result<E
                 continue;
             }
         };
-        for d in &decisions {
-            let line = json!({"run": run, "seq": seq, "now_ms": input.now_ms, "decision": d});
-            writeln!(out, "{line}")?;
+        for decision in &decisions {
+            let line = DecisionLine {
+                run,
+                seq,
+                now_ms: input.now_ms,
+                decision,
+            };
+            writeln!(out, "{}", serde_json::to_string(&line)?)?;
             report.decisions += 1;
         }
         if check {
@@ -335,6 +349,9 @@ pub struct ReplayArgs {
 
 /// Runs the command.
 pub fn run_cli(args: ReplayArgs) -> Result<()> {
+    if !(args.speed.is_finite() && args.speed > 0.0) {
+        bail!("--speed must be a positive number, got {}", args.speed);
+    }
     let files = expand(&args.files)?;
     let rec = Recorded::read(&files)?;
     if args.into_engine {

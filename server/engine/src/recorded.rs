@@ -83,7 +83,7 @@ pub enum RecordedOutcome {
     /// Computed: the document, the planner's remarks and the per-region paths.
     Planned {
         /// The plan document (version 1).
-        doc: PlanDocument,
+        doc: Box<PlanDocument>,
         /// Planner remarks.
         warnings: Vec<String>,
         /// Per-region cover paths in visiting order.
@@ -162,7 +162,7 @@ pub enum RecordedEvent {
         /// Robot id.
         robot: String,
         /// The document assigned.
-        doc: PlanDocument,
+        doc: Box<PlanDocument>,
     },
     /// [`Event::MapChanged`].
     MapChanged {
@@ -212,7 +212,7 @@ impl From<&Event> for RecordedEvent {
                 plan_id: plan_id.clone(),
                 outcome: match outcome {
                     JobOutcome::Planned { doc, warnings, regions } => RecordedOutcome::Planned {
-                        doc: (**doc).clone(),
+                        doc: Box::new((**doc).clone()),
                         warnings: warnings.clone(),
                         regions: regions.clone(),
                     },
@@ -237,7 +237,7 @@ impl From<&Event> for RecordedEvent {
             Event::AssignPlan { plan_id, robot, doc } => Self::AssignPlan {
                 plan_id: plan_id.clone(),
                 robot: robot.clone(),
-                doc: (**doc).clone(),
+                doc: Box::new((**doc).clone()),
             },
             Event::MapChanged { site, min, max } => Self::MapChanged {
                 site: site.clone(),
@@ -287,7 +287,7 @@ impl RecordedEvent {
                 plan_id,
                 outcome: match outcome {
                     RecordedOutcome::Planned { doc, warnings, regions } => JobOutcome::Planned {
-                        doc: Arc::new(doc),
+                        doc: Arc::from(doc),
                         warnings,
                         regions,
                     },
@@ -309,7 +309,7 @@ impl RecordedEvent {
             Self::AssignPlan { plan_id, robot, doc } => Event::AssignPlan {
                 plan_id,
                 robot,
-                doc: Arc::new(doc),
+                doc: Arc::from(doc),
             },
             Self::MapChanged { site, min, max } => Event::MapChanged { site, min, max },
             Self::CheckFinished {

@@ -379,9 +379,11 @@ impl WriterThread {
                 Err(RecvTimeoutError::Timeout) => {}
             }
             if !self.grid_every.is_zero() && last_grid.is_none_or(|t| t.elapsed() >= self.grid_every) {
-                last_grid = Some(Instant::now());
-                if let Err(e) = self.grids() {
-                    tracing::warn!("recording the occupancy grids: {e:#}");
+                match self.grids() {
+                    // The first grid comes as soon as a site is known.
+                    Ok(0) => {}
+                    Ok(_) => last_grid = Some(Instant::now()),
+                    Err(e) => tracing::warn!("recording the occupancy grids: {e:#}"),
                 }
             }
             let housekeeping = if last_flush.elapsed() >= FLUSH_EVERY {
@@ -394,7 +396,12 @@ impl WriterThread {
                 tracing::error!("recording: {e:#}");
             }
         }
-        // Whatever is still queued (the Stop came after it) was written above; finish the file.
+        // Whatever is still queued (the Stop came after it) was written above. The final occupancy, then finish.
+        if !self.grid_every.is_zero()
+            && let Err(e) = self.grids()
+        {
+            tracing::warn!("recording the occupancy grids: {e:#}");
+        }
         self.files.finish()?;
         Ok(self.files.finished().to_vec())
     }
@@ -477,12 +484,13 @@ impl WriterThread {
         Ok(())
     }
 
-    /// One `foxglove.Grid` per known site.
-    fn grids(&mut self) -> Result<()> {
+    /// One `foxglove.Grid` per known site; returns how many.
+    fn grids(&mut self) -> Result<usize> {
         let sites: Vec<(String, Arc<OccupancyGrid>)> = match self.sites.lock() {
             Ok(s) => s.iter().map(|(k, v)| (k.clone(), v.clone())).collect(),
-            Err(_) => return Ok(()),
+            Err(_) => return Ok(0),
         };
+        let n = sites.len();
         for (site, grid) in sites {
             let live: Vec<(f64, f64)> = self
                 .live
@@ -506,6 +514,51 @@ impl WriterThread {
                 &serde_json::to_vec(&msg)?,
             )?;
         }
-        Ok(())
+        Ok(n)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn recorder(capacity: usize, max_bytes: usize) -> (Recorder, Receiver<Entry>) {
+        let (tx, rx) = sync_channel(capacity);
+        let r = Recorder {
+            shared: Arc::new(Shared {
+                tx,
+                run: 1,
+                seq: AtomicU64::new(0),
+                queued_bytes: Arc::new(AtomicUsize::new(0)),
+                max_queued_bytes: max_bytes,
+                dropped: AtomicU64::new(0),
+                sites: Arc::new(Mutex::new(BTreeMap::new())),
+                pending_sites: Mutex::new(Vec::new()),
+            }),
+        };
+        (r, rx)
+    }
+
+    #[test]
+    fn a_full_queue_drops_and_counts_instead_of_blocking() {
+        let (r, rx) = recorder(2, 1000);
+        r.liveliness("k", true);
+        r.liveliness("k", false);
+        r.liveliness("k", true); // full: dropped
+        assert_eq!(r.dropped(), 1);
+        // Payload bytes are capped separately from the message count.
+        drop(rx.try_recv());
+        r.ingest(Kind::PointCloud2, "k", vec![0; 2000]);
+        assert_eq!(r.dropped(), 2, "over queue_bytes");
+        r.ingest(Kind::PointCloud2, "k", vec![0; 500]);
+        assert_eq!(r.dropped(), 2);
+        assert_eq!(r.shared.queued_bytes.load(Ordering::Relaxed), 500);
+        // Engine inputs get consecutive sequence numbers even when dropped, so a replay sees the gap.
+        assert_eq!(r.engine_input(&Event::Shutdown, 5), 1);
+        assert_eq!(r.engine_input(&Event::Shutdown, 6), 2);
+        assert_eq!(r.dropped(), 4);
+        drop(rx);
+        r.liveliness("k", true);
+        assert_eq!(r.dropped(), 5, "a stopped writer counts as a drop too");
     }
 }
