@@ -22,6 +22,9 @@ async fn robot_streams_gets_its_plan_and_is_lost_when_its_token_drops() -> Resul
     let port = free_port()?;
     let endpoint = format!("tcp/127.0.0.1:{port}");
     let mut config = test_config(dir.path());
+    // The obstacle box below overlaps one of the demo map's own obstacles and is counted voxel by voxel; keep
+    // the points the static map explains (dropping them is tested in live_map and the corrections test).
+    config.zenoh.known_tolerance_m = 0.0;
     config.zenoh.listen = vec![endpoint.clone()];
     let server = TestServer::start(config).await?;
 

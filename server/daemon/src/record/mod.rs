@@ -312,7 +312,9 @@ impl Recording {
             .context("starting the recorder thread")?;
         let stop = CancellationToken::new();
         let taps = match zenoh {
-            Some((session, keys)) => tap::start(session, keys, recorder.clone(), stop.clone()).await?,
+            Some((session, keys)) => {
+                tap::start(session, keys, &daemon.zenoh.mapping, recorder.clone(), stop.clone()).await?
+            }
             None => Vec::new(),
         };
         tracing::info!(dir = %config.dir.display(), run, "recording to MCAP");

@@ -13,22 +13,23 @@ use zenoh::sample::SampleKind;
 use super::Recorder;
 use super::channels::Kind;
 
-/// The key expressions recorded, with the stream each carries: the fleet's own layout. (A fleet configured
-/// for a ROS 2 key layout passes that layout's `Ros2Mapping::subscriptions` here.)
-pub fn ingest_keys(keys: &KeySpace) -> Vec<(String, Stream)> {
-    Ros2Mapping::Native.subscriptions(keys)
+/// The key expressions recorded, with the stream each carries: those the fleet bridge ingests under the
+/// fleet's key mapping (native, zenoh-bridge-ros2dds or rmw_zenoh).
+pub fn ingest_keys(keys: &KeySpace, mapping: &Ros2Mapping) -> Vec<(String, Stream)> {
+    mapping.subscriptions(keys)
 }
 
 /// Declares the taps; each runs until `stop` or the session closes.
 pub async fn start(
     session: &zenoh::Session,
     keys: &Arc<KeySpace>,
+    mapping: &Ros2Mapping,
     recorder: Recorder,
     stop: CancellationToken,
 ) -> Result<Vec<JoinHandle<()>>> {
     let z = |e: zenoh::Error| anyhow!("zenoh (recorder tap): {e}");
     let mut tasks = Vec::new();
-    for (key_expr, stream) in ingest_keys(keys) {
+    for (key_expr, stream) in ingest_keys(keys, mapping) {
         let sub = session.declare_subscriber(key_expr).await.map_err(z)?;
         let (r, s) = (recorder.clone(), stop.clone());
         tasks.push(tokio::spawn(async move {
