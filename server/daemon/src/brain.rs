@@ -122,18 +122,38 @@ pub fn now_ms() -> u64 {
         .map_or(0, |d| d.as_millis() as u64)
 }
 
-/// Starts the engine thread. With `overlay`, plan jobs see their site's live obstacle points.
-pub fn spawn(
-    engine: Engine,
-    store: Arc<Store>,
-    views: Arc<Views>,
-    events: broadcast::Sender<PlanEvent>,
-    publisher: Option<PlanPublisher>,
-    live: Arc<LiveMaps>,
-    overlay: Option<Arc<LiveMaps>>,
-    runtime: tokio::runtime::Handle,
-    recorder: Option<crate::record::Recorder>,
-) -> std::io::Result<(BrainHandle, std::thread::JoinHandle<()>)> {
+/// What the engine thread works with besides the engine itself.
+pub struct BrainParts {
+    /// The durable store (the engine thread is its only writer).
+    pub store: Arc<Store>,
+    /// The read model it keeps current.
+    pub views: Arc<Views>,
+    /// Plan events for SSE subscribers.
+    pub events: broadcast::Sender<PlanEvent>,
+    /// Plans and corrections out to robots (none without Zenoh).
+    pub publisher: Option<PlanPublisher>,
+    /// Every site's live map: path checks read it, and the site's static map is handed to it.
+    pub live: Arc<LiveMaps>,
+    /// With it, plan jobs see their site's live obstacle points.
+    pub overlay: Option<Arc<LiveMaps>>,
+    /// The runtime whose blocking pool runs plan jobs and path checks.
+    pub runtime: tokio::runtime::Handle,
+    /// MCAP recording of the engine's inputs and decisions.
+    pub recorder: Option<crate::record::Recorder>,
+}
+
+/// Starts the engine thread.
+pub fn spawn(engine: Engine, parts: BrainParts) -> std::io::Result<(BrainHandle, std::thread::JoinHandle<()>)> {
+    let BrainParts {
+        store,
+        views,
+        events,
+        publisher,
+        live,
+        overlay,
+        runtime,
+        recorder,
+    } = parts;
     let (tx, rx) = mpsc::channel(INBOX);
     let (running_tx, running_rx) = watch::channel(0);
     let checks = CheckRunner::new(runtime.clone(), tx.clone(), live.clone());

@@ -81,14 +81,16 @@ pub async fn run(
     let recording = Recording::start(&config, zenoh.as_ref().map(|(s, k)| (s, k)), live.clone()).await?;
     let (brain, engine_thread) = brain::spawn(
         engine,
-        store.clone(),
-        views.clone(),
-        events.clone(),
-        publisher,
-        live.clone(),
-        config.jobs.live_overlay.then(|| live.clone()),
-        tokio::runtime::Handle::current(),
-        recording.as_ref().map(Recording::recorder),
+        brain::BrainParts {
+            store: store.clone(),
+            views: views.clone(),
+            events: events.clone(),
+            publisher,
+            live: live.clone(),
+            overlay: config.jobs.live_overlay.then(|| live.clone()),
+            runtime: tokio::runtime::Handle::current(),
+            recorder: recording.as_ref().map(Recording::recorder),
+        },
     )
     .context("starting the engine thread")?;
     restore(&config, &store, &views, &brain).await?;

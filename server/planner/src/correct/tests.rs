@@ -38,8 +38,8 @@ impl Site {
         World::new(&self.grid, &self.field, Some(&self.tree)).expect("consistent")
     }
 
-    /// Brute-force smallest distance from the polyline (continuous segments) to any obstacle, and whether it
-    /// stays on the map.
+    /// Brute-force smallest distance from the polyline (continuous segments) to any obstacle (static cells
+    /// credited `STATIC_SLACK_M`, see below), and whether it stays on the map.
     pub(crate) fn oracle(&self, pts: &[Point2]) -> (f64, bool) {
         let g = &self.grid.geometry;
         let statics: Vec<Point2> = (0..g.len())
@@ -58,9 +58,14 @@ impl Site {
         } else {
             pts.windows(2).map(|w| (w[0], w[1])).collect()
         };
+        // The correction's contract: live points kept at the radius exactly, the static map (which the plan
+        // itself may touch at exactly the radius) with `STATIC_SLACK_M` of slack.
         let mut best = f64::INFINITY;
         for (a, b) in segs {
-            for o in statics.iter().chain(&self.live) {
+            for o in &statics {
+                best = best.min(point_segment_distance(*o, a, b) + super::world::STATIC_SLACK_M);
+            }
+            for o in &self.live {
                 best = best.min(point_segment_distance(*o, a, b));
             }
         }
