@@ -278,7 +278,7 @@ pub struct LastCorrection {
     pub reason: CorrectionReason,
     /// When it was sent, milliseconds since the Unix epoch.
     pub at_ms: u64,
-    /// Trigger to ready, microseconds.
+    /// Server-side check time, microseconds.
     pub compute_us: u64,
 }
 

@@ -60,7 +60,8 @@ pub struct CorrectionDoc {
     /// missed until a later revisit).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub skipped: Vec<[f64; 2]>,
-    /// Time from the trigger (map change or pose) to the correction being ready, microseconds.
+    /// Time the check that made it took on the server (judgment, optimisation, verification, re-profiling),
+    /// microseconds.
     pub compute_us: u64,
 }
 

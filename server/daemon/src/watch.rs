@@ -65,7 +65,12 @@ impl CheckRunner {
                         "path correction"
                     );
                 }
-                CheckOutcome::Failed(why) => tracing::warn!(robot = job.robot, "path check failed: {why}"),
+                CheckOutcome::Failed(why) => {
+                    // Persistent (e.g. a robot standing inside an obstacle): counted, logged at debug level
+                    // so a check every few hundred milliseconds does not flood the log.
+                    metrics::counter!("shift_check_failed_total").increment(1);
+                    tracing::debug!(robot = job.robot, "path check failed: {why}");
+                }
                 CheckOutcome::Clear => tracing::debug!(robot = job.robot, compute_us, "path check: clear"),
             }
             // The engine must learn of every end (it keeps one check per robot in flight).
