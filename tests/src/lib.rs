@@ -14,8 +14,6 @@ use shiftd::Config;
 use tokio::task::JoinHandle;
 use tokio_util::sync::CancellationToken;
 
-pub mod robot;
-
 /// A running server.
 pub struct TestServer {
     /// `http://127.0.0.1:PORT`.

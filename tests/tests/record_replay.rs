@@ -11,7 +11,7 @@ use anyhow::{Context, Result, anyhow};
 use serde_json::{Value, json};
 use shift_proto::ros::odometry::encode_odometry;
 use shift_proto::ros::point_cloud2::encode_point_cloud2_xyz;
-use shift_tests::robot::{LONG, free_port, header, obstacle_points, odom, poll, robot_session};
+use shift_tests::fleet::{LONG, free_port, header, obstacle_box, odom, poll, robot_session};
 use shift_tests::{TestServer, demo_request, test_config};
 use shiftd::replay::{Action, Recorded, into_engine, onto_zenoh};
 use zenoh::bytes::Encoding;
@@ -55,7 +55,9 @@ async fn recorded_session(record_dir: &Path, data_dir: &Path) -> Result<Vec<[f32
         .encoding(Encoding::APPLICATION_CDR)
         .await
         .map_err(zerr)?;
-    let pts = obstacle_points();
+    // A 0.4 m box at (4, 4), three layers (8 × 8 × 3 voxels), plus a floor point that is filtered.
+    let mut pts = obstacle_box(4.0, 4.0, 20, 3);
+    pts.push([4.0, 4.0, 0.0]);
     robot
         .put(
             "shift/default/robots/r1/cloud",

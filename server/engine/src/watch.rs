@@ -167,14 +167,8 @@ pub fn run_check(job: &CheckJob, live: Option<&IkdTree>) -> CheckOutcome {
         Ok(r) => r,
         Err(e) => return CheckOutcome::Failed(e.to_string()),
     };
-    // A stretch that only lacks margin (no collision) is worth a new version only when the patch does
-    // better; otherwise a detour that itself keeps just the radius would be "corrected" again at every check.
-    let radius = job.params.robot_radius_m;
-    if first.min_clearance_m >= radius {
-        let improved = min_clearance(&repair.waypoints, &world, job.params.d_safe()) > first.min_clearance_m + 0.01;
-        if repair.kind != RepairKind::Optimised || !improved {
-            return CheckOutcome::Clear;
-        }
+    if !correct::worth_publishing(first, &repair, &world, &job.params) {
+        return CheckOutcome::Clear;
     }
     let timed = |i: usize| TimedWaypoint {
         position: path[i],
@@ -220,19 +214,6 @@ pub fn run_check(job: &CheckJob, live: Option<&IkdTree>) -> CheckOutcome {
         skipped: repair.skipped.iter().map(|p| [p.x, p.y]).collect(),
         iterations: repair.iterations,
     })
-}
-
-/// Smallest clearance (live and static, capped at `upto`) along a polyline sampled every 2 cm, metres.
-fn min_clearance(points: &[Point2], world: &World<'_>, upto: f64) -> f64 {
-    let mut best = upto;
-    for w in points.windows(2) {
-        let n = ((w[1] - w[0]).norm() / 0.02).ceil().max(1.0) as usize;
-        for k in 0..=n {
-            let q = w[0] + (w[1] - w[0]) * (k as f64 / n as f64);
-            best = best.min(world.clearance_upto(q, upto));
-        }
-    }
-    best
 }
 
 #[cfg(test)]

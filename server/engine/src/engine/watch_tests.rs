@@ -31,9 +31,13 @@ fn lane_doc() -> Arc<PlanDocument> {
     })
 }
 
-/// An engine with plan p-1 ready and assigned to r1, and r1 at the path's start.
+/// An engine with plan p-1 ready and assigned to r1.
 fn assigned() -> (Engine, Arc<PlanDocument>) {
-    let mut e = engine(1, 4);
+    assigned_with(engine(1, 4))
+}
+
+/// `e` (with site "s") with plan p-1 ready and assigned to r1.
+fn assigned_with(mut e: Engine) -> (Engine, Arc<PlanDocument>) {
     e.handle(Event::PlanRequested(request("s")), 0).expect("queued");
     let doc = lane_doc();
     e.handle(
@@ -212,29 +216,7 @@ fn watching_can_be_switched_off() {
         ..EngineConfig::default()
     });
     e.handle(super::tests::site_event("s"), 0).expect("site");
-    e.handle(Event::PlanRequested(request("s")), 0).expect("queued");
-    let doc = lane_doc();
-    e.handle(
-        Event::JobFinished {
-            plan_id: "p-1".into(),
-            outcome: JobOutcome::Planned {
-                doc: doc.clone(),
-                warnings: vec![],
-                regions: vec![],
-            },
-        },
-        1,
-    )
-    .expect("ready");
-    e.handle(
-        Event::AssignPlan {
-            plan_id: "p-1".into(),
-            robot: "r1".into(),
-            doc,
-        },
-        2,
-    )
-    .expect("assigned");
+    let (mut e, _) = assigned_with(e);
     assert!(checks(&e.handle(pose(0.5), 1000).expect("pose")).is_empty());
 }
 

@@ -39,7 +39,7 @@ pub use params::CorrectParams;
 pub use path::PathPos;
 pub use repair::{optimise, repair};
 pub use retime::{Retimed, TimedWaypoint, retime};
-pub use verify::{segment_clear, verify};
+pub use verify::{min_clearance, segment_clear, verify};
 pub use world::World;
 
 use crate::geom::Point2;
@@ -89,4 +89,13 @@ pub fn apply(path: &[Point2], r: &Repair) -> Vec<Point2> {
     out.extend_from_slice(&r.waypoints);
     out.extend_from_slice(&path[to..]);
     out
+}
+
+/// Whether `r` is worth publishing for `breach`. A collision (clearance under the radius) always is. A
+/// stretch that only lacks margin is worth it only when an optimised patch clears it by at least 1 cm more:
+/// a detour or skip keeps just the radius itself, and would be "repaired" again at every later check.
+pub fn worth_publishing(breach: &Breach, r: &Repair, world: &World<'_>, p: &CorrectParams) -> bool {
+    breach.min_clearance_m < p.robot_radius_m
+        || (r.kind == RepairKind::Optimised
+            && min_clearance(&r.waypoints, world, p.d_safe()) > breach.min_clearance_m + 0.01)
 }

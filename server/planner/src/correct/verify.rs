@@ -59,3 +59,17 @@ pub fn verify(points: &[Point2], world: &World<'_>, robot_radius_m: f64) -> bool
             .all(|w| segment_clear(w[0], w[1], world, robot_radius_m)),
     }
 }
+
+/// Smallest clearance (live and static, capped at `upto`) along the polyline `points`, sampled every 2 cm,
+/// metres (`upto` for fewer than two points).
+pub fn min_clearance(points: &[Point2], world: &World<'_>, upto: f64) -> f64 {
+    let mut best = upto;
+    for w in points.windows(2) {
+        let n = ((w[1] - w[0]).norm() / 0.02).ceil().max(1.0) as usize;
+        for k in 0..=n {
+            let q = w[0] + (w[1] - w[0]) * (k as f64 / n as f64);
+            best = best.min(world.clearance_upto(q, upto));
+        }
+    }
+    best
+}
