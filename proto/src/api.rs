@@ -65,7 +65,7 @@ pub struct PlanOptions {
     /// `auto` (default), `bcd`, `walls`, `voronoi`, `grid`, `none`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub decomposition: Option<String>,
-    /// `two-opt` (default), `rrt`, `anneal`.
+    /// `two-opt`, `rrt` (default), `anneal`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub order: Option<String>,
     /// `lanes` (default), `spiral`.

@@ -160,6 +160,18 @@ async fn upload_plan_poll_path_events_metrics() -> Result<()> {
         .iter()
         .position(|(n, v)| n == "status" && v["status"] == "planning");
     assert!(planning < first_region);
+    // Regions stream while the plan is still being linked: progress keeps advancing after the first one
+    // (the rest are computing), and every region is announced before the plan is ready.
+    let last_progress = events.iter().rposition(|(n, _)| n == "progress");
+    if regions > 1 {
+        assert!(
+            first_region < last_progress,
+            "regions arrive while the job runs: {events:?}"
+        );
+    }
+    let ready = events.iter().position(|(n, v)| n == "status" && v["status"] == "ready");
+    let last_region = events.iter().rposition(|(n, _)| n == "region-ready");
+    assert!(last_region < ready);
 
     let status = server.wait_plan(&id, LONG, |s| s == "ready").await?;
     assert_eq!(status["progress"], 1.0);

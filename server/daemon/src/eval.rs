@@ -111,7 +111,7 @@ pub fn run_eval(root: &Path, render: Option<&Path>, mut on_row: impl FnMut(&Eval
         let mut default_len = 0.0;
         for d in std::iter::once(DecompositionMethod::Auto).chain(DecompositionMethod::ALL) {
             let orders: &[OrderMethod] = if d == DecompositionMethod::Auto {
-                &[OrderMethod::TwoOpt]
+                &[OrderMethod::default()]
             } else {
                 &OrderMethod::ALL
             };

@@ -10,7 +10,8 @@ use std::time::Instant;
 
 use shift_engine::{Event, JobOutcome, PlanJob, run_job};
 use shift_planner::PlannerError;
-use shift_planner::pipeline::{PlanMonitor, WaypointKind};
+use shift_planner::geom::Point2;
+use shift_planner::pipeline::{PlanMonitor, RegionSummary};
 use shift_proto::RegionReady;
 use tokio::sync::mpsc;
 
@@ -50,6 +51,18 @@ impl PlanMonitor for Monitor {
 
     fn cancelled(&self) -> bool {
         self.cancel.load(Ordering::Relaxed) || self.interrupt.load(Ordering::Relaxed)
+    }
+
+    fn region_ready(&mut self, region: &RegionSummary, path: &[Point2]) {
+        // Not lossy: a client may start a robot on it. Regions are few; waiting for room is cheap.
+        let _ = self.to_engine.blocking_send(Msg::event(Event::JobRegionReady {
+            plan_id: self.plan_id.clone(),
+            region: RegionReady {
+                region: region.id,
+                polygon: region.polygon.iter().map(|p| [p.x, p.y]).collect(),
+                path: path.iter().map(|p| [p.x, p.y]).collect(),
+            },
+        }));
     }
 }
 
@@ -92,11 +105,9 @@ impl JobRunner {
                 Ok(Ok(res)) => {
                     metrics::histogram!("shift_plan_compute_seconds").record(compute_ms / 1e3);
                     let doc = to_document(&plan_id, &res.output, &res.profile, res.with_attribute, compute_ms);
-                    let regions = regions_ready(&res.output.waypoints, &doc.regions);
                     JobOutcome::Planned {
                         doc: Arc::new(doc),
                         warnings: res.output.warnings,
-                        regions,
                     }
                 }
                 Ok(Err(PlannerError::Cancelled)) if interrupt.load(Ordering::Relaxed) => JobOutcome::Interrupted,
@@ -149,31 +160,4 @@ pub fn live_overlay(live: &LiveMaps, site: &str) -> Vec<[f64; 2]> {
     tracing::debug!(site, points = points.len(), "live overlay for a plan job");
     metrics::histogram!("shift_plan_overlay_points").record(points.len() as f64);
     points
-}
-
-/// Each region's cover waypoints in visiting order, grouped from the finished path.
-fn regions_ready(
-    waypoints: &[shift_planner::pipeline::Waypoint],
-    regions: &[shift_proto::RegionDoc],
-) -> Vec<RegionReady> {
-    let mut out: Vec<RegionReady> = Vec::new();
-    for w in waypoints {
-        let (WaypointKind::Cover, Some(id)) = (w.kind, w.region) else {
-            continue;
-        };
-        let p = [w.position.x, w.position.y];
-        match out.iter_mut().find(|r| r.region == id) {
-            Some(r) => r.path.push(p),
-            None => out.push(RegionReady {
-                region: id,
-                polygon: regions
-                    .iter()
-                    .find(|r| r.id == id)
-                    .map(|r| r.polygon.clone())
-                    .unwrap_or_default(),
-                path: vec![p],
-            }),
-        }
-    }
-    out
 }

@@ -81,7 +81,7 @@ struct PlanArgs {
     #[arg(long, default_value = "auto")]
     decomposition: DecompositionMethod,
     /// Visiting order solver: two-opt, rrt, anneal.
-    #[arg(long, default_value = "two-opt")]
+    #[arg(long, default_value = "rrt")]
     order: OrderMethod,
     /// In-region pattern: lanes, spiral.
     #[arg(long, default_value = "lanes")]

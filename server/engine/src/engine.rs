@@ -46,8 +46,6 @@ pub enum JobOutcome {
         doc: Arc<PlanDocument>,
         /// Planner remarks.
         warnings: Vec<String>,
-        /// Per-region cover paths in visiting order.
-        regions: Vec<RegionReady>,
     },
     /// The planner refused or failed; the message says why.
     Failed(String),
@@ -87,6 +85,13 @@ pub enum Event {
         plan_id: String,
         /// Fraction done.
         progress: f64,
+    },
+    /// A worker linked one region of the plan it computes (in visiting order, before the job finishes).
+    JobRegionReady {
+        /// Plan id.
+        plan_id: String,
+        /// The region and its cover path.
+        region: RegionReady,
     },
     /// A worker finished.
     JobFinished {
@@ -286,6 +291,14 @@ impl Engine {
                         plan_id,
                         progress: rec.progress,
                     }));
+                }
+            }
+            Event::JobRegionReady { plan_id, region } => {
+                if let Some(rec) = self.plans.get_mut(&plan_id)
+                    && rec.status == PlanStatus::Planning
+                {
+                    rec.regions_ready += 1;
+                    out.push(Command::Publish(PlanEvent::RegionReady { plan_id, region }));
                 }
             }
             Event::JobFinished { plan_id, outcome } => self.finished(&plan_id, outcome, now_ms, &mut out),
@@ -645,14 +658,7 @@ impl Engine {
         }
         rec.updated_ms = now_ms;
         match outcome {
-            JobOutcome::Planned { doc, warnings, regions } => {
-                for region in regions {
-                    rec.regions_ready += 1;
-                    out.push(Command::Publish(PlanEvent::RegionReady {
-                        plan_id: plan_id.to_owned(),
-                        region,
-                    }));
-                }
+            JobOutcome::Planned { doc, warnings } => {
                 rec.status = PlanStatus::Ready;
                 rec.progress = 1.0;
                 rec.version = doc.version;
@@ -671,6 +677,7 @@ impl Engine {
             JobOutcome::Interrupted => {
                 rec.status = PlanStatus::Queued;
                 rec.progress = 0.0;
+                rec.regions_ready = 0; // the next run streams them again
                 self.queue.push_front(plan_id.to_owned());
             }
         }

@@ -86,8 +86,6 @@ pub enum RecordedOutcome {
         doc: Box<PlanDocument>,
         /// Planner remarks.
         warnings: Vec<String>,
-        /// Per-region cover paths in visiting order.
-        regions: Vec<RegionReady>,
     },
     /// The planner refused or failed.
     Failed {
@@ -133,6 +131,13 @@ pub enum RecordedEvent {
         /// Fraction done.
         #[serde(with = "lossless_f64")]
         progress: f64,
+    },
+    /// [`Event::JobRegionReady`].
+    JobRegionReady {
+        /// Plan id.
+        plan_id: String,
+        /// The region and its cover path.
+        region: RegionReady,
     },
     /// [`Event::JobFinished`].
     JobFinished {
@@ -208,13 +213,16 @@ impl From<&Event> for RecordedEvent {
                 plan_id: plan_id.clone(),
                 progress: *progress,
             },
+            Event::JobRegionReady { plan_id, region } => Self::JobRegionReady {
+                plan_id: plan_id.clone(),
+                region: region.clone(),
+            },
             Event::JobFinished { plan_id, outcome } => Self::JobFinished {
                 plan_id: plan_id.clone(),
                 outcome: match outcome {
-                    JobOutcome::Planned { doc, warnings, regions } => RecordedOutcome::Planned {
+                    JobOutcome::Planned { doc, warnings } => RecordedOutcome::Planned {
                         doc: Box::new((**doc).clone()),
                         warnings: warnings.clone(),
-                        regions: regions.clone(),
                     },
                     JobOutcome::Failed(reason) => RecordedOutcome::Failed { reason: reason.clone() },
                     JobOutcome::Cancelled => RecordedOutcome::Cancelled,
@@ -283,13 +291,13 @@ impl RecordedEvent {
             Self::PlanRequested { request } => Event::PlanRequested(request),
             Self::CancelRequested { plan_id } => Event::CancelRequested { plan_id },
             Self::JobProgress { plan_id, progress } => Event::JobProgress { plan_id, progress },
+            Self::JobRegionReady { plan_id, region } => Event::JobRegionReady { plan_id, region },
             Self::JobFinished { plan_id, outcome } => Event::JobFinished {
                 plan_id,
                 outcome: match outcome {
-                    RecordedOutcome::Planned { doc, warnings, regions } => JobOutcome::Planned {
+                    RecordedOutcome::Planned { doc, warnings } => JobOutcome::Planned {
                         doc: Arc::from(doc),
                         warnings,
-                        regions,
                     },
                     RecordedOutcome::Failed { reason } => JobOutcome::Failed(reason),
                     RecordedOutcome::Cancelled => JobOutcome::Cancelled,
@@ -601,12 +609,19 @@ mod tests {
                 plan_id: "p-1".into(),
                 progress: 0.1 + 0.2,
             },
+            Event::JobRegionReady {
+                plan_id: "p-1".into(),
+                region: RegionReady {
+                    region: 3,
+                    polygon: vec![[0.0, 0.0], [1.0, 0.0], [0.5, 0.1 + 0.2]],
+                    path: vec![[0.25, 0.5]],
+                },
+            },
             Event::JobFinished {
                 plan_id: "p-1".into(),
                 outcome: JobOutcome::Planned {
                     doc: Arc::new(doc("p-1")),
                     warnings: vec!["w".into()],
-                    regions: vec![],
                 },
             },
             Event::AssignPlan {

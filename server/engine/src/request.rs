@@ -54,7 +54,7 @@ pub fn parse_options(req: &PlanRequest) -> Result<ParsedOptions> {
             .map_err(|e: String| invalid(format!("options.decomposition: {e}")))?,
     };
     let order = match o.order.as_deref() {
-        None => OrderMethod::TwoOpt,
+        None => OrderMethod::default(),
         Some(s) => s.parse().map_err(|e: String| invalid(format!("options.order: {e}")))?,
     };
     let pattern = match o.pattern.as_deref() {

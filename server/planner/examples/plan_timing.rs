@@ -4,7 +4,7 @@
 use std::time::Instant;
 
 use shift_planner::geom::Point2;
-use shift_planner::pipeline::{NoMonitor, PlanParams, plan};
+use shift_planner::pipeline::{PlanMonitor, PlanParams, plan};
 use shift_planner::space::{CoverageSpace, RobotShape};
 use shift_planner::testing::cluttered_site;
 
@@ -29,7 +29,11 @@ fn main() {
         .expect("space");
         let space_ms = t.elapsed().as_secs_f64() * 1e3;
         let t = Instant::now();
-        let out = plan(&space, &PlanParams::default(), &mut NoMonitor).expect("plan");
+        let mut stages = Stages(Instant::now(), Vec::new());
+        let out = plan(&space, &params(), &mut stages).expect("plan");
+        if std::env::var("STAGES").is_ok() {
+            eprintln!("stages (progress, ms): {:?}", stages.1);
+        }
         let plan_ms = t.elapsed().as_secs_f64() * 1e3;
         let m = out.metrics;
         println!(
@@ -43,5 +47,32 @@ fn main() {
             out.pattern.name(),
             out.lane_placement
         );
+    }
+}
+
+/// Default params, with `DECOMP` and `PLACE` (lattice, fit, framed) overrides for stage profiling.
+fn params() -> PlanParams {
+    let mut p = PlanParams::default();
+    if let Some(d) = std::env::var("DECOMP").ok().and_then(|d| d.parse().ok()) {
+        p.decomposition = d;
+    }
+    if let Ok(pl) = std::env::var("PLACE") {
+        use shift_planner::pattern::lanes::Placement;
+        p.lanes.placement = match pl.as_str() {
+            "lattice" => Some(Placement::Lattice),
+            "fit" => Some(Placement::Fit),
+            "framed" => Some(Placement::Framed),
+            _ => None,
+        };
+    }
+    p
+}
+
+/// Records elapsed milliseconds at every progress report.
+struct Stages(Instant, Vec<(f64, u64)>);
+
+impl PlanMonitor for Stages {
+    fn progress(&mut self, fraction: f64) {
+        self.1.push((fraction, self.0.elapsed().as_millis() as u64));
     }
 }

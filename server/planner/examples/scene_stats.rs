@@ -1,6 +1,7 @@
 //! Plans shared scenes with one decomposition and prints metrics and where the length goes:
 //! `cargo run --release -p shift-planner --example scene_stats -- DIR [DIR ...]`.
-//! Environment: `DECOMP` (auto, bcd, walls, …; default auto), `PATTERN` (lanes, spiral), `PASSES=0` to skip
+//! Environment: `DECOMP` (auto, bcd, walls, …; default auto), `PATTERN` (lanes, spiral), `ORDER` (two-opt,
+//! rrt, anneal), `PASSES=0` to skip
 //! targeted passes.
 
 use std::path::Path;
@@ -39,6 +40,9 @@ fn main() {
     }
     if let Ok(p) = std::env::var("PATTERN") {
         params.pattern = p.parse().unwrap_or(params.pattern);
+    }
+    if let Some(o) = std::env::var("ORDER").ok().and_then(|o| o.parse().ok()) {
+        params.order = o;
     }
     if std::env::var("PASSES").is_ok_and(|v| v == "0") {
         params.targeted_passes = false;

@@ -76,11 +76,6 @@ fn planned() -> JobOutcome {
             metrics: PlanMetricsDoc::default(),
         }),
         warnings: vec![],
-        regions: vec![RegionReady {
-            region: 0,
-            polygon: vec![],
-            path: vec![],
-        }],
     }
 }
 
@@ -97,6 +92,36 @@ fn request_is_persisted_before_it_starts_and_queue_respects_workers() {
     let c2 = e.handle(Event::PlanRequested(request("s")), 11).expect("accepted");
     assert!(started(&c2).is_empty(), "one worker is busy");
     assert_eq!(e.queue_depth(), 1);
+    // A region streams while the job runs: published at once, counted on the record.
+    let region = RegionReady {
+        region: 0,
+        polygon: vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]],
+        path: vec![[0.5, 0.5], [0.6, 0.5]],
+    };
+    let cr = e
+        .handle(
+            Event::JobRegionReady {
+                plan_id: "p-1".into(),
+                region: region.clone(),
+            },
+            11,
+        )
+        .expect("region");
+    assert!(cr.iter().any(
+        |c| matches!(c, Command::Publish(PlanEvent::RegionReady { plan_id, region: r }) if plan_id == "p-1" && *r == region)
+    ));
+    assert_eq!(e.plan("p-1").expect("known").regions_ready, 1);
+    // Not for a plan that is not planning.
+    let late = e
+        .handle(
+            Event::JobRegionReady {
+                plan_id: "p-2".into(),
+                region,
+            },
+            11,
+        )
+        .expect("ignored");
+    assert!(late.is_empty(), "{late:?}");
     let c3 = e
         .handle(
             Event::JobFinished {
@@ -354,7 +379,6 @@ fn assign_tracks_progress_to_done_and_moves_between_robots() {
             outcome: JobOutcome::Planned {
                 doc: doc.clone(),
                 warnings: vec![],
-                regions: vec![],
             },
         },
         2,

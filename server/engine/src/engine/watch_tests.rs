@@ -46,7 +46,6 @@ fn assigned_with(mut e: Engine) -> (Engine, Arc<PlanDocument>) {
             outcome: JobOutcome::Planned {
                 doc: doc.clone(),
                 warnings: vec![],
-                regions: vec![],
             },
         },
         1,

@@ -267,6 +267,8 @@ pub(crate) struct Search<'g, 's> {
     pub(crate) epsilon_m: f64,
     /// Lower bound of the per-metre cost multiplier (scales the heuristic).
     pub(crate) heuristic_scale: f64,
+    /// The search gives up (no path) once every open path would cost more than this.
+    pub(crate) max_cost: f64,
 }
 
 /// A goal set as the heuristic sees it: a centre cell's coordinates and the set's extent (largest octile
@@ -422,7 +424,7 @@ pub(crate) fn search(
     let mut best = f64::INFINITY;
     let mut best_cell = None;
     while let Some(e) = fwd.pop_open() {
-        if e.key >= best {
+        if e.key >= best || e.key > s.max_cost {
             break;
         }
         let u = e.cell as usize;

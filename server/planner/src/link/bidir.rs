@@ -45,6 +45,9 @@ pub(crate) fn search(
         if mu <= top {
             break;
         }
+        if top > s.max_cost {
+            return None;
+        }
         let (this, other, target) = if forward {
             (&mut *fwd, &*bwd, &to_goals)
         } else {

@@ -58,6 +58,7 @@ pub fn geodesic_distance(space: &CoverageSpace, a: Point2, b: Point2) -> Option<
         alpha: 0.0,
         epsilon_m: 1.0,
         heuristic_scale: 1.0,
+        max_cost: f64::INFINITY,
     };
     let mut frontier = Frontier::default();
     let roots = [(ca, (g.center_of(ca) - a).norm())];

@@ -217,6 +217,12 @@ impl<'s> Linker<'s> {
     /// segment is `segment_ok`. `None` when `a` or `b` is not a valid robot position
     /// ([`CoverageSpace::point_ok`]) or `b` cannot be reached from `a`.
     pub fn link(&mut self, a: Point2, b: Point2) -> Option<Vec<Point2>> {
+        self.link_within(a, b, f64::INFINITY)
+    }
+
+    /// [`Linker::link`], giving up (`None`) when the grid search's cost would exceed `max_cost` (with α = 0
+    /// the cost is the grid path's length, metres): a bounded search for "is there a short way round?".
+    pub fn link_within(&mut self, a: Point2, b: Point2, max_cost: f64) -> Option<Vec<Point2>> {
         let space = self.space;
         if !space.point_ok(a) || !space.point_ok(b) {
             return None;
@@ -226,7 +232,7 @@ impl<'s> Linker<'s> {
         if shortcut::segment_keeps(space, a, b, direct_need) {
             return Some(vec![a, b]);
         }
-        let grid = self.grid_path(a, b)?;
+        let grid = self.grid_path_within(a, b, max_cost)?;
         let path = shortcut(space, &grid.points, self.params.preferred_clearance_m);
         debug_assert!(path.windows(2).all(|w| space.segment_ok(w[0], w[1])));
         Some(path)
@@ -235,6 +241,10 @@ impl<'s> Linker<'s> {
     /// The grid search alone (no shortcutting), with the configured method. `None` when `a` or `b` is not a
     /// valid robot position or `b` is not reachable from `a`.
     pub fn grid_path(&mut self, a: Point2, b: Point2) -> Option<GridPath> {
+        self.grid_path_within(a, b, f64::INFINITY)
+    }
+
+    fn grid_path_within(&mut self, a: Point2, b: Point2, max_cost: f64) -> Option<GridPath> {
         let space = self.space;
         let graph = Graph::new(space);
         let search = Search {
@@ -242,6 +252,7 @@ impl<'s> Linker<'s> {
             alpha: self.params.alpha,
             epsilon_m: self.params.epsilon_m,
             heuristic_scale: self.min_multiplier,
+            max_cost,
         };
         let sources = search.attach(a);
         let targets = search.attach(b);

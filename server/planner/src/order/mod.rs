@@ -324,9 +324,11 @@ pub trait Orderer: Send + Sync {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum OrderMethod {
     /// 2-opt + Or-opt local search with exact option assignment ([`TwoOpt`]).
-    #[default]
     TwoOpt,
-    /// Record-to-record travel ([`RecordToRecord`]).
+    /// Record-to-record travel ([`RecordToRecord`]). The default: it starts from the 2-opt optimum and
+    /// returns its record, so it is never longer than 2-opt alone, and it escapes the local optima 2-opt
+    /// stops in on sites with many regions.
+    #[default]
     RecordToRecord,
     /// Simulated annealing ([`Anneal`]).
     Anneal,
@@ -913,7 +915,7 @@ mod tests {
             assert_eq!(m.name().parse::<OrderMethod>(), Ok(m));
             assert_eq!(m.to_string(), m.name());
         }
-        assert_eq!(OrderMethod::default(), OrderMethod::TwoOpt);
+        assert_eq!(OrderMethod::default(), OrderMethod::RecordToRecord);
         let err = "2opt".parse::<OrderMethod>().err().unwrap_or_default();
         assert!(err.contains("two-opt, rrt, anneal"), "{err}");
     }

@@ -2,9 +2,13 @@
 //! the visiting-order problem (each region may be entered at any corner of its lane set; a route may also be
 //! driven backwards).
 
+use std::cell::RefCell;
+use std::collections::HashMap;
+
 use crate::geom::{Point2, Vector2, direction};
 use crate::order::{DistanceMatrix, OrderMethod, SolveBudget, TourOption, TourProblem};
 use crate::pattern::Task;
+use crate::space::CoverageSpace;
 
 /// One task as driven: which task, from which vertex, in which direction.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -123,20 +127,47 @@ fn task_options(tasks: &[Task], k: usize) -> Vec<(Point2, Point2, Leg)> {
     }
 }
 
-/// Orders `tasks` as an open tour starting at `entry` (Euclidean connection estimates): the better of the
-/// local-search tour and the plain sweep order (lanes by offset, nearest end first, other tasks inserted
-/// where they cost least) — local search from a nearest-neighbour start can miss the zigzag that is optimal
-/// for a monotone region.
-pub fn route_from(
-    tasks: &[Task],
-    angle: f64,
-    entry: Point2,
-    seed: u64,
-    iterations: u64,
-    stop: Option<&dyn Fn() -> bool>,
-) -> RegionRoute {
-    let mut search = SearchProblem::new(tasks);
-    route_with(tasks, angle, entry, seed, iterations, stop, search.as_mut())
+/// How a region's tasks are ordered: the cost of a connection between two points, and the local search's
+/// seed and bounds.
+#[derive(Clone, Copy)]
+pub struct RouteSearch<'a> {
+    /// Estimated cost of driving from one point to another between tasks (e.g. [`euclidean`]).
+    pub connect: &'a dyn Fn(Point2, Point2) -> f64,
+    /// Seed of the local search.
+    pub seed: u64,
+    /// Work bound of the local search (moves).
+    pub iterations: u64,
+    /// Polled by the local search; true stops it with the best tour so far.
+    pub stop: Option<&'a dyn Fn() -> bool>,
+    /// The driven length of a connection that `connect` may underestimate (`None` when `connect` is right;
+    /// infinity when no link exists); used to cost the routes found (see [`region_options`]). `None`:
+    /// `connect` only.
+    pub exact: Option<&'a dyn Fn(Point2, Point2) -> Option<f64>>,
+}
+
+/// Straight-line connection cost (no obstacles).
+pub fn euclidean(a: Point2, b: Point2) -> f64 {
+    (b - a).norm()
+}
+
+/// True when the straight segment `a`–`b` runs through an obstacle (a wall between two rooms of one region,
+/// an obstacle between rings) rather than merely grazing the clearance the way lane ends along a ragged wall
+/// do: some point of it, sampled every half radius, is closer than half the radius to a non-free cell (no
+/// wall can hide between two samples). Such a step is linked around the obstacle, often metres longer.
+pub fn through_obstacle(space: &CoverageSpace, a: Point2, b: Point2) -> bool {
+    let d = (b - a).norm();
+    let r = space.robot.radius_m;
+    let step = (0.5 * r).max(space.geometry().resolution);
+    let n = (d / step).ceil() as usize;
+    (0..=n).any(|k| space.clearance_at(a + (b - a) * (k as f64 / n.max(1) as f64)) < 0.5 * r)
+}
+
+/// Orders `tasks` as an open tour starting at `entry`: the better of the local-search tour and the plain
+/// sweep order (lanes by offset, nearest end first, other tasks inserted where they cost least) — local search
+/// from a nearest-neighbour start can miss the zigzag that is optimal for a monotone region.
+pub fn route_from(tasks: &[Task], angle: f64, entry: Point2, search: &RouteSearch<'_>) -> RegionRoute {
+    let mut problem = SearchProblem::new(tasks, search.connect);
+    route_with(tasks, angle, entry, search, problem.as_mut())
 }
 
 /// [`route_from`] with the search problem of the region's tasks built once for all its entries (`None`:
@@ -145,16 +176,14 @@ fn route_with(
     tasks: &[Task],
     angle: f64,
     entry: Point2,
-    seed: u64,
-    iterations: u64,
-    stop: Option<&dyn Fn() -> bool>,
-    search: Option<&mut SearchProblem>,
+    search: &RouteSearch<'_>,
+    problem: Option<&mut SearchProblem>,
 ) -> RegionRoute {
-    let swept = route_sweep(tasks, angle, entry);
-    let Some(search) = search else {
+    let swept = route_sweep(tasks, angle, entry, search.connect);
+    let Some(problem) = problem else {
         return swept;
     };
-    let searched = search.route(tasks, entry, seed, iterations, stop);
+    let searched = problem.route(tasks, entry, search);
     if swept.cost + 1e-9 < searched.cost {
         swept
     } else {
@@ -166,13 +195,13 @@ fn route_with(
 /// search's dense distance matrix has the square of this many entries).
 pub const MAX_SEARCH_POINTS: usize = 4000;
 
-/// Cost of driving `legs` from `entry`: task lengths plus straight connections.
-fn legs_cost(tasks: &[Task], entry: Point2, legs: &[Leg]) -> f64 {
+/// Cost of driving `legs` from `entry`: task lengths plus connections.
+fn legs_cost(tasks: &[Task], entry: Point2, legs: &[Leg], connect: &dyn Fn(Point2, Point2) -> f64) -> f64 {
     let mut at = entry;
     let mut cost = 0.0;
     for l in legs {
         let pts = l.points(tasks);
-        cost += (pts[0] - at).norm() + tasks[l.task].length();
+        cost += connect(at, pts[0]) + tasks[l.task].length();
         at = *pts.last().unwrap_or(&at);
     }
     cost
@@ -180,7 +209,7 @@ fn legs_cost(tasks: &[Task], entry: Point2, legs: &[Leg]) -> f64 {
 
 /// The sweep order: lanes sorted by their offset across the sweep direction (then along it), each driven from
 /// its end nearest to the current position; every other task is inserted where it adds the least.
-fn route_sweep(tasks: &[Task], angle: f64, entry: Point2) -> RegionRoute {
+fn route_sweep(tasks: &[Task], angle: f64, entry: Point2, connect: &dyn Fn(Point2, Point2) -> f64) -> RegionRoute {
     let d = direction(angle);
     let n = Vector2::new(-d.y, d.x);
     let mut lanes: Vec<usize> = (0..tasks.len())
@@ -198,9 +227,7 @@ fn route_sweep(tasks: &[Task], angle: f64, entry: Point2) -> RegionRoute {
     let first_near = |ls: &[usize]| {
         ls.first().map_or(f64::INFINITY, |&k| {
             let t = &tasks[k];
-            (t.points[0] - entry)
-                .norm()
-                .min((t.points[t.points.len() - 1] - entry).norm())
+            connect(entry, t.points[0]).min(connect(entry, t.points[t.points.len() - 1]))
         })
     };
     let mut rev_lanes = lanes.clone();
@@ -213,7 +240,7 @@ fn route_sweep(tasks: &[Task], angle: f64, entry: Point2) -> RegionRoute {
     for k in lanes {
         let t = &tasks[k];
         let (a, b) = (t.points[0], t.points[t.points.len() - 1]);
-        let reversed = (b - at).norm() < (a - at).norm();
+        let reversed = connect(at, b) < connect(at, a);
         legs.push(Leg {
             task: k,
             reversed,
@@ -236,8 +263,8 @@ fn route_sweep(tasks: &[Task], angle: f64, entry: Point2) -> RegionRoute {
             for pos in 0..=legs.len() {
                 let p = if pos == 0 { entry } else { ends[pos - 1].1 };
                 let delta = match ends.get(pos) {
-                    Some(&(q, _)) => (a - p).norm() + (q - b).norm() - (q - p).norm(),
-                    None => (a - p).norm(),
+                    Some(&(q, _)) => connect(p, a) + connect(b, q) - connect(p, q),
+                    None => connect(p, a),
                 };
                 if best.is_none_or(|(bd, _, _)| delta < bd) {
                     best = Some((delta, pos, leg));
@@ -248,7 +275,7 @@ fn route_sweep(tasks: &[Task], angle: f64, entry: Point2) -> RegionRoute {
             legs.insert(pos, leg);
         }
     }
-    let cost = legs_cost(tasks, entry, &legs);
+    let cost = legs_cost(tasks, entry, &legs, connect);
     let exit = legs.last().map_or(entry, |l| *l.points(tasks).last().unwrap_or(&entry));
     RegionRoute {
         legs,
@@ -268,7 +295,7 @@ struct SearchProblem {
 
 impl SearchProblem {
     /// The problem of `tasks`, or `None` when their options have more than [`MAX_SEARCH_POINTS`] points.
-    fn new(tasks: &[Task]) -> Option<Self> {
+    fn new(tasks: &[Task], connect: &dyn Fn(Point2, Point2) -> f64) -> Option<Self> {
         let count: usize = (0..tasks.len()).map(|k| 2 * task_options(tasks, k).len()).sum();
         if count > MAX_SEARCH_POINTS {
             return None;
@@ -300,7 +327,7 @@ impl SearchProblem {
             nodes.push(node);
             legs_of.push(legs);
         }
-        let dist = DistanceMatrix::from_fn(points.len(), |i, j| (points[i] - points[j]).norm());
+        let dist = DistanceMatrix::from_fn(points.len(), |i, j| connect(points[i], points[j]));
         Some(Self {
             problem: TourProblem {
                 dist,
@@ -314,24 +341,17 @@ impl SearchProblem {
     }
 
     /// The searched route from `entry`.
-    fn route(
-        &mut self,
-        tasks: &[Task],
-        entry: Point2,
-        seed: u64,
-        iterations: u64,
-        stop: Option<&dyn Fn() -> bool>,
-    ) -> RegionRoute {
+    fn route(&mut self, tasks: &[Task], entry: Point2, search: &RouteSearch<'_>) -> RegionRoute {
         self.points[0] = entry;
         for j in 1..self.points.len() {
-            self.problem.dist.set(0, j, (self.points[j] - entry).norm());
+            self.problem.dist.set(0, j, (search.connect)(entry, self.points[j]));
         }
         let tour = OrderMethod::TwoOpt.orderer().solve(
             &self.problem,
-            seed,
+            search.seed,
             &SolveBudget {
-                max_iterations: iterations,
-                stop,
+                max_iterations: search.iterations,
+                stop: search.stop,
             },
         );
         let legs: Vec<Leg> = tour
@@ -372,18 +392,34 @@ pub fn corner_entries(tasks: &[Task], angle: f64) -> Vec<Point2> {
 }
 
 /// All routes of a region worth offering to the visiting-order problem: one per corner entry, and each
-/// driven backwards.
-pub fn region_options(
-    tasks: &[Task],
-    angle: f64,
-    seed: u64,
-    iterations: u64,
-    stop: Option<&dyn Fn() -> bool>,
-) -> Vec<RegionRoute> {
-    let mut out: Vec<RegionRoute> = Vec::new();
-    let mut search = SearchProblem::new(tasks);
-    for e in corner_entries(tasks, angle) {
-        let r = route_with(tasks, angle, e, seed, iterations, stop, search.as_mut());
+/// driven backwards. The search plans with [`RouteSearch::connect`]; with [`RouteSearch::exact`], each
+/// route's cost is then recomputed with the driven length of every connection it uses that cannot be
+/// taken straight, so that the visiting order (and the choice among strategies) sees what the robot will
+/// drive — a step through a wall costs the way round, not the wall's thickness.
+pub fn region_options(tasks: &[Task], angle: f64, search: &RouteSearch<'_>) -> Vec<RegionRoute> {
+    let mut problem = SearchProblem::new(tasks, search.connect);
+    let mut routes: Vec<RegionRoute> = corner_entries(tasks, angle)
+        .into_iter()
+        .map(|e| route_with(tasks, angle, e, search, problem.as_mut()))
+        .collect();
+    if let Some(exact) = search.exact {
+        // Routes from different corners share most of their steps: each is looked at once.
+        let known: RefCell<HashMap<[u64; 4], f64>> = RefCell::default();
+        let driven = |a: Point2, b: Point2| {
+            let key = [a.x.to_bits(), a.y.to_bits(), b.x.to_bits(), b.y.to_bits()];
+            if let Some(&d) = known.borrow().get(&key) {
+                return d;
+            }
+            let d = exact(a, b).unwrap_or_else(|| (search.connect)(a, b));
+            known.borrow_mut().insert(key, d);
+            d
+        };
+        for r in &mut routes {
+            r.cost = legs_cost(tasks, r.entry, &r.legs, &driven);
+        }
+    }
+    let mut out: Vec<RegionRoute> = Vec::with_capacity(2 * routes.len());
+    for r in routes {
         let back = r.reversed();
         out.push(r);
         out.push(back);
@@ -406,7 +442,14 @@ mod tests {
     #[test]
     fn lanes_are_driven_as_a_zigzag() {
         let tasks: Vec<Task> = (0..6).map(|k| lane(k as f64 * 0.3)).collect();
-        let r = route_from(&tasks, 0.0, Point2::new(0.0, 0.0), 1, 10_000, None);
+        let search = RouteSearch {
+            connect: &euclidean,
+            seed: 1,
+            iterations: 10_000,
+            stop: None,
+            exact: None,
+        };
+        let r = route_from(&tasks, 0.0, Point2::new(0.0, 0.0), &search);
         assert_eq!(r.legs.len(), 6);
         let mut seen: Vec<usize> = r.legs.iter().map(|l| l.task).collect();
         seen.sort_unstable();

@@ -1,0 +1,330 @@
+//! The planning stages up to the visiting order: decompose → pattern per region → targeted passes → region
+//! routes → tour. A [`Prepared`] plan knows its coverage and, from the tour's cost, its length closely
+//! enough to rank it against other strategies before any link is searched ([`Prepared::estimate`]).
+
+use crate::decompose::{DecomposeParams, NO_REGION, Regions, decompose};
+use crate::error::{PlannerError, Result};
+use crate::geom::{Point2, polyline_length};
+use crate::link::{LinkParams, Linker, geodesic_matrix};
+use crate::map::DistanceField;
+use crate::metrics::CoverageRaster;
+use crate::order::{DistanceMatrix, SolveBudget, Tour, TourOption, TourProblem};
+use crate::pattern::boundary::{candidates, select};
+use crate::pattern::frame::frame_tasks;
+use crate::pattern::lanes::{Placement, RegionView, plan_lanes};
+use crate::pattern::spiral::plan_rings;
+use crate::pattern::{PatternMethod, Task};
+use crate::space::CoverageSpace;
+
+use super::route::{RegionRoute, RouteSearch, euclidean, region_options, through_obstacle};
+use super::{PlanMonitor, PlanParams};
+
+/// A plan decided up to its visiting order; [`super::assemble::assemble`] links it into a path.
+#[derive(Debug, Clone)]
+pub struct Prepared {
+    /// The request's parameters (with the placement this plan used).
+    pub params: PlanParams,
+    /// The regions.
+    pub regions: Regions,
+    /// Cells of every region.
+    pub cells: Vec<Vec<usize>>,
+    /// Tasks of every region (pattern and targeted passes).
+    pub tasks: Vec<Vec<Task>>,
+    /// Lane angle of every region, radians.
+    pub angles: Vec<f64>,
+    /// Route options of every region (empty for regions with nothing to do).
+    pub options: Vec<Vec<RegionRoute>>,
+    /// Regions with a route, in node order of the tour problem.
+    pub active: Vec<usize>,
+    /// Visiting order over `active`.
+    pub tour: Tour,
+    /// Remarks so far.
+    pub warnings: Vec<String>,
+    /// What this plan is expected to give, before linking.
+    pub estimate: Estimate,
+}
+
+/// A prepared plan's expected metrics: coverage of the tasks and in-region steps, and the length of the tour
+/// (tasks, straight steps, geodesic transits). Links only add length (they bend around what a straight step
+/// or a geodesic cuts) and coverage, so the estimate ranks strategies the way their final plans rank.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Estimate {
+    /// Share of coverable cells covered, percent.
+    pub coverage_pct: f64,
+    /// Expected path length, metres.
+    pub length_m: f64,
+    /// (length × tool width − covered area) / covered area, percent (DESIGN §6).
+    pub overlap_pct: f64,
+}
+
+impl Estimate {
+    /// Meets the coverage bar of DESIGN §6 (a prepared plan never collides: every piece is checked).
+    pub fn good(&self, target_pct: f64) -> bool {
+        self.coverage_pct + 1e-9 >= target_pct
+    }
+}
+
+/// Runs the stages up to the tour; `monitor` sees progress 0.1 … 0.75 and may cancel between stages.
+pub fn prepare(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanMonitor) -> Result<Prepared> {
+    let check = |m: &dyn PlanMonitor| {
+        if m.cancelled() {
+            Err(PlannerError::Cancelled)
+        } else {
+            Ok(())
+        }
+    };
+    let g = *space.geometry();
+    let decompose_params = DecomposeParams {
+        seed: params.seed,
+        ..params.decompose
+    };
+    let regions = decompose(space, params.decomposition, &decompose_params);
+    check(monitor)?;
+    monitor.progress(0.1);
+
+    // Cover targets: each coverable cell belongs to the region of its nearest reachable cell.
+    let nearest_reachable = DistanceField::compute(g, |i| space.reachable[i], false);
+    let target_labels: Vec<u32> = (0..g.len())
+        .map(|i| {
+            if !space.coverable[i] {
+                return NO_REGION;
+            }
+            nearest_reachable
+                .nearest_site_index(i)
+                .map_or(NO_REGION, |r| regions.labels[r])
+        })
+        .collect();
+    let cells = regions.cells();
+    let mut targets = vec![Vec::new(); regions.count];
+    for (i, &l) in target_labels.iter().enumerate() {
+        if l != NO_REGION {
+            targets[l as usize].push(i);
+        }
+    }
+    let view = |id: usize| RegionView {
+        id: id as u32,
+        labels: &regions.labels,
+        target_labels: &target_labels,
+        cells: &cells[id],
+        targets: &targets[id],
+    };
+
+    // Main pattern per region, stamped so that the targeted passes see what every region already covers.
+    let mut raster = CoverageRaster::new(g, space.robot.tool_width_m / 2.0);
+    let mut tasks: Vec<Vec<Task>> = Vec::with_capacity(regions.count);
+    let mut angles = Vec::with_capacity(regions.count);
+    for id in 0..regions.count {
+        let (angle, t) = match params.pattern {
+            PatternMethod::Lanes if params.lanes.placement == Some(Placement::Framed) => {
+                let (angle, mut t) = plan_lanes(space, view(id), &params.lanes);
+                t.extend(frame_tasks(space, view(id)));
+                (angle, t)
+            }
+            PatternMethod::Lanes => plan_lanes(space, view(id), &params.lanes),
+            PatternMethod::Spiral => (0.0, plan_rings(space, view(id))),
+        };
+        for task in &t {
+            raster.stamp_polyline(&task.points);
+        }
+        tasks.push(t);
+        angles.push(angle);
+        check(monitor)?;
+    }
+    monitor.progress(0.3);
+
+    // Routes inside each region, from each corner; the steps between legs cover too, so stamp them before
+    // looking for what is still missing.
+    let mut options: Vec<Vec<RegionRoute>> = vec![Vec::new(); regions.count];
+    route_regions(
+        space,
+        &params.link,
+        (&tasks, &angles),
+        params.seed,
+        monitor,
+        &mut options,
+        0..regions.count,
+    );
+    for (id, opts) in options.iter().enumerate() {
+        let Some(route) = opts.first() else { continue };
+        let mut prev: Option<Point2> = None;
+        for leg in &route.legs {
+            let pts = leg.points(&tasks[id]);
+            if let (Some(a), Some(&b)) = (prev, pts.first())
+                && space.segment_ok(a, b)
+            {
+                raster.stamp_segment(a, b);
+            }
+            prev = pts.last().copied();
+        }
+    }
+    check(monitor)?;
+    monitor.progress(0.45);
+    if params.targeted_passes {
+        let mut pool = Vec::new();
+        for id in 0..regions.count {
+            pool.extend(candidates(space, view(id), &raster, &nearest_reachable, &params.passes));
+        }
+        let chosen = select(space, pool, &mut raster, &params.passes);
+        let mut touched = vec![false; regions.count];
+        for c in chosen {
+            touched[c.region as usize] = true;
+            tasks[c.region as usize].push(c.task);
+        }
+        let redo: Vec<usize> = (0..regions.count).filter(|&id| touched[id]).collect();
+        route_regions(
+            space,
+            &params.link,
+            (&tasks, &angles),
+            params.seed,
+            monitor,
+            &mut options,
+            redo.into_iter(),
+        );
+    }
+    check(monitor)?;
+    monitor.progress(0.6);
+    let active: Vec<usize> = (0..regions.count).filter(|&id| !options[id].is_empty()).collect();
+
+    // Visiting order over regions with joint entry choice, on geodesic distances.
+    let mut points = vec![space.start];
+    let mut nodes = Vec::with_capacity(active.len());
+    for &id in &active {
+        let mut node = Vec::new();
+        for r in &options[id] {
+            let e = points.len();
+            points.push(r.entry);
+            points.push(r.exit);
+            node.push(TourOption {
+                entry: e,
+                exit: e + 1,
+                cost: r.cost,
+                reverse: 0,
+            });
+        }
+        for (j, o) in node.iter_mut().enumerate() {
+            o.reverse = j ^ 1; // region_options pushes (route, reversed route) pairs
+        }
+        nodes.push(node);
+    }
+    let geo = geodesic_matrix(space, &points);
+    let n = points.len();
+    let dist = DistanceMatrix::from_fn(n, |i, j| geo[i * n + j]);
+    let problem = TourProblem {
+        dist,
+        depot: 0,
+        nodes,
+        closed: true,
+    };
+    let tour = {
+        let stop_flag = || monitor.cancelled();
+        params.order.orderer().solve(
+            &problem,
+            params.seed,
+            &SolveBudget {
+                max_iterations: params.order_iterations,
+                stop: Some(&stop_flag),
+            },
+        )
+    };
+    check(monitor)?;
+    monitor.progress(0.75);
+
+    // The raster holds the steps of each region's first route; the tour may drive others. The estimate's
+    // coverage is that of the tasks and of the straight steps of the routes the tour drives.
+    let mut driven = CoverageRaster::new(g, space.robot.tool_width_m / 2.0);
+    for (&k, &o) in tour.order.iter().zip(&tour.options) {
+        let id = active[k];
+        let mut prev: Option<Point2> = None;
+        for leg in &options[id][o].legs {
+            let pts = leg.points(&tasks[id]);
+            if let (Some(a), Some(&b)) = (prev, pts.first())
+                && space.segment_ok(a, b)
+            {
+                driven.stamp_segment(a, b);
+            }
+            driven.stamp_polyline(&pts);
+            prev = pts.last().copied();
+        }
+    }
+    let estimate = estimate(space, &driven, tour.cost);
+    Ok(Prepared {
+        params: params.clone(),
+        regions,
+        cells,
+        tasks,
+        angles,
+        options,
+        active,
+        tour,
+        warnings: space.warnings.clone(),
+        estimate,
+    })
+}
+
+fn estimate(space: &CoverageSpace, raster: &CoverageRaster, length_m: f64) -> Estimate {
+    let g = space.geometry();
+    let coverable = space.coverable_count();
+    let covered_coverable = (0..g.len())
+        .filter(|&i| space.coverable[i] && raster.is_covered(i))
+        .count();
+    let covered_area = raster.count() as f64 * g.resolution * g.resolution;
+    Estimate {
+        coverage_pct: if coverable > 0 {
+            covered_coverable as f64 / coverable as f64 * 100.0
+        } else {
+            100.0
+        },
+        length_m,
+        overlap_pct: if covered_area > 0.0 {
+            (length_m * space.robot.tool_width_m - covered_area) / covered_area * 100.0
+        } else {
+            0.0
+        },
+    }
+}
+
+/// Slack of the first, bounded search for a way round an obstacle between two tasks, in tool widths.
+const ROUND_WIDTHS: f64 = 6.0;
+
+/// Computes the route options of the regions in `ids` (regions without tasks get none): searched on
+/// straight-line distances, costed with the way round every step that runs through an obstacle.
+fn route_regions(
+    space: &CoverageSpace,
+    link: &LinkParams,
+    (tasks, angles): (&[Vec<Task>], &[f64]),
+    seed: u64,
+    monitor: &dyn PlanMonitor,
+    options: &mut [Vec<RegionRoute>],
+    ids: impl Iterator<Item = usize>,
+) {
+    let stop_flag = || monitor.cancelled();
+    let slack_m = ROUND_WIDTHS * space.robot.tool_width_m;
+    // Steps take the shortest way (the assembly links them with the same parameters).
+    let linker = std::cell::RefCell::new(Linker::new(space, &LinkParams { alpha: 0.0, ..*link }));
+    // Steps that only graze the clearance (lane ends along a ragged wall) are linked with centimetres more
+    // and keep their straight length. A step through an obstacle gets a short bounded search first (a way
+    // round a pillar); only without one is the map searched (a wall between two rooms of one region). No
+    // way at all costs infinity.
+    let exact = |a: Point2, b: Point2| -> Option<f64> {
+        if !through_obstacle(space, a, b) {
+            return None;
+        }
+        let mut l = linker.borrow_mut();
+        let path = l.link_within(a, b, (b - a).norm() + slack_m).or_else(|| l.link(a, b));
+        Some(path.map_or(f64::INFINITY, |p| polyline_length(&p)))
+    };
+    for id in ids {
+        options[id] = if tasks[id].is_empty() {
+            Vec::new()
+        } else {
+            let search = RouteSearch {
+                connect: &euclidean,
+                seed,
+                iterations: (tasks[id].len() as u64).pow(2).clamp(1_000, 200_000),
+                stop: Some(&stop_flag),
+                exact: Some(&exact),
+            };
+            region_options(&tasks[id], angles[id], &search)
+        };
+    }
+}
