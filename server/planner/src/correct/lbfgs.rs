@@ -10,7 +10,7 @@
 //! iteration. The `correct` criterion bench reports the optimiser's time per repair.
 
 /// A smooth objective with a preconditioner.
-pub(crate) trait Objective {
+pub trait Objective {
     /// f(x), writing ∇f(x) into `g` (same length as `x`).
     fn eval(&mut self, x: &[f64], g: &mut [f64]) -> f64;
     /// Replaces `v` by H₀⁻¹ v, H₀ a positive definite approximation of the Hessian at the last point
@@ -20,20 +20,20 @@ pub(crate) trait Objective {
 
 /// What a minimisation returned.
 #[derive(Debug, Clone)]
-pub(crate) struct Minimum {
+pub struct Minimum {
     /// The best point found.
-    pub(crate) x: Vec<f64>,
+    pub x: Vec<f64>,
     /// f at `x`.
-    pub(crate) f: f64,
+    pub f: f64,
     /// Iterations (accepted steps).
-    pub(crate) iterations: u32,
+    pub iterations: u32,
 }
 
 /// Minimises `obj` from `x0` for at most `max_iterations` accepted steps. Monotone: f never increases, so
 /// the result's f ≤ f(x0). Stops when the gradient's largest component falls below `g_tol`, when two
 /// steps in a row decrease f by less than `f_rel_tol` relative, or when the line search finds no decrease.
 pub(crate) fn minimize(
-    obj: &mut impl Objective,
+    obj: &mut (impl Objective + ?Sized),
     x0: &[f64],
     max_iterations: u32,
     memory: usize,
