@@ -355,6 +355,37 @@ mod tests {
     }
 
     #[test]
+    fn matches_brute_force_on_seeded_random_clouds() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(0x10ca1);
+        for _ in 0..12 {
+            let mut live = Vec::new();
+            for _ in 0..rng.random_range(1..5) {
+                let c = Point2::new(rng.random_range(1.0..9.0), rng.random_range(1.0..7.0));
+                let spread = rng.random_range(0.01..1.0);
+                for _ in 0..rng.random_range(1..400) {
+                    let (a, r) = (
+                        rng.random_range(0.0..std::f64::consts::TAU),
+                        spread * rng.random::<f64>().sqrt(),
+                    );
+                    live.push(c + nalgebra::Vector2::new(r * a.cos(), r * a.sin()));
+                }
+            }
+            let site = Site::new(walled(10.0, 8.0), live);
+            let world = site.world();
+            let lo = Point2::new(rng.random_range(0.5..4.0), rng.random_range(0.5..3.0));
+            let hi = lo + nalgebra::Vector2::new(rng.random_range(0.0..5.0), rng.random_range(0.0..4.0));
+            let radius = rng.random_range(0.05..0.8);
+            let local = LocalObstacles::new(&world, lo, hi, radius);
+            for _ in 0..1500 {
+                let p = Point2::new(rng.random_range(lo.x..=hi.x), rng.random_range(lo.y..=hi.y));
+                let want = brute(&site, p).filter(|&d| d < radius);
+                assert_eq!(local.live_within(p).map(|(_, d)| d), want, "at {p:?}, radius {radius}");
+            }
+        }
+    }
+
+    #[test]
     fn a_huge_box_gets_larger_buckets_and_stays_exact() {
         let grid = walled(8.0, 6.0);
         let site = Site::new(grid, blob(Point2::new(3.0, 3.0), 0.4, 0.05));
