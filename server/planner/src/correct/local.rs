@@ -1,10 +1,17 @@
 //! A window-sized cache of the obstacles for the optimiser: the live points near the window copied out of
-//! the site's tree once into buckets, so the many nearest-obstacle queries of an optimisation scan a few
-//! buckets instead of descending a tree of the whole site.
+//! the site's tree once, sorted into a uniform grid of buckets (row-major, a quarter of the query radius a
+//! side), so the many nearest-obstacle queries of an optimisation scan a few contiguous runs of points
+//! instead of descending a tree of the whole site.
 //!
 //! Exact where it answers: for a query inside the cached region (shrunk by the query radius) it returns the
 //! nearest obstacle point whenever one lies within `radius` metres (static sites through the distance field,
 //! live points from the buckets), and `None` when none does; outside that region it asks the [`World`].
+//!
+//! A live query first asks a summed-area table of the bucket counts whether the square of side 2·radius
+//! around it holds any point (most queries of a window lie far from every point and stop there). Otherwise
+//! it scans the query's own bucket, then the bucket rows outward from its own, each row over the buckets
+//! that the circle of the best distance so far spans: points sorted row-major make that span one contiguous
+//! slice. A row whose band lies at least the best distance away ends the scan in its direction.
 
 use crate::geom::Point2;
 use crate::map::ikd_tree::{Aabb, Point3};
@@ -12,24 +19,32 @@ use crate::map::ikd_tree::{Aabb, Point3};
 use super::cost::Obstacles;
 use super::world::World;
 
+/// Most buckets a side, and in all, of one cache (bounded memory whatever the box; larger boxes get larger
+/// buckets).
+const MAX_SIDE: f64 = 4096.0;
+const MAX_BUCKETS: f64 = (1u32 << 20) as f64;
+
+/// Widening of every bucket range a query computes, metres: covers the rounding of the key arithmetic, so a
+/// point nearer than the best distance is never left out of a scanned range.
+const SLACK_M: f64 = 1e-6;
+
 /// Live points of a box in buckets, with the world as fallback.
 pub(crate) struct LocalObstacles<'a, 'w> {
     world: &'a World<'w>,
     /// Queries within [lo, hi] are answered from the buckets.
     lo: Point2,
     hi: Point2,
+    /// Lower corner of bucket (0, 0); the buckets cover [lo − radius, hi + radius].
     origin: Point2,
     bucket: f64,
     nx: usize,
     ny: usize,
-    /// Bucket b holds `pts[start[b]..start[b + 1]]`.
+    /// Bucket b = y·nx + x holds `pts[start[b]..start[b + 1]]`, so buckets x0..=x1 of row y hold
+    /// `pts[start[y·nx + x0]..start[y·nx + x1 + 1]]`.
     start: Vec<u32>,
     pts: Vec<Point2>,
-    /// Coarse cells of four buckets a side: whether any point lies in them (a query far from every point
-    /// checks 3 × 3 of these and stops).
-    coarse: Vec<bool>,
-    cnx: usize,
-    cny: usize,
+    /// Summed-area table of the bucket counts: `sat[y·(nx+1) + x]` points lie in buckets [0, x) × [0, y).
+    sat: Vec<u32>,
     radius: f64,
     band: f64,
 }
@@ -37,16 +52,44 @@ pub(crate) struct LocalObstacles<'a, 'w> {
 impl<'a, 'w> LocalObstacles<'a, 'w> {
     /// The cache for queries in the box `[lo, hi]` (map frame, metres) that need obstacles within `radius`.
     pub(crate) fn new(world: &'a World<'w>, lo: Point2, hi: Point2, radius: f64) -> Self {
-        let bucket = (0.25 * radius).max(world.resolution());
+        let ok = lo.x.is_finite()
+            && lo.y.is_finite()
+            && hi.x.is_finite()
+            && hi.y.is_finite()
+            && radius.is_finite()
+            && lo.x <= hi.x
+            && lo.y <= hi.y;
         let origin = Point2::new(lo.x - radius, lo.y - radius);
         let top = Point2::new(hi.x + radius, hi.y + radius);
-        let nx = (((top.x - origin.x) / bucket).ceil() as usize).clamp(1, 4096);
-        let ny = (((top.y - origin.y) / bucket).ceil() as usize).clamp(1, 4096);
+        let (ex, ey) = if ok {
+            (top.x - origin.x, top.y - origin.y)
+        } else {
+            (0.0, 0.0)
+        };
+        let bucket = (0.25 * radius)
+            .max(world.resolution())
+            .max(ex / MAX_SIDE)
+            .max(ey / MAX_SIDE)
+            .max((ex * ey / MAX_BUCKETS).sqrt());
+        let nx = ((ex / bucket).ceil() as usize).max(1);
+        let ny = ((ey / bucket).ceil() as usize).max(1);
         let mut raw: Vec<Point2> = Vec::new();
-        if let Some(tree) = world.live {
+        if ok && let Some(tree) = world.live {
+            // Grown a little so that the f32 box never cuts off a point of the f64 one; points outside the
+            // buckets' extent are at least `radius` from every query the buckets answer, and the clamping
+            // of `key` puts them in an edge bucket.
+            let grow = |v: f64| 1e-3 + 1e-6 * v.abs();
             let b = Aabb::new(
-                Point3::new(origin.x as f32, origin.y as f32, f32::NEG_INFINITY),
-                Point3::new(top.x as f32, top.y as f32, f32::INFINITY),
+                Point3::new(
+                    (origin.x - grow(origin.x)) as f32,
+                    (origin.y - grow(origin.y)) as f32,
+                    f32::NEG_INFINITY,
+                ),
+                Point3::new(
+                    (top.x + grow(top.x)) as f32,
+                    (top.y + grow(top.y)) as f32,
+                    f32::INFINITY,
+                ),
             );
             raw = tree
                 .within_box(&b)
@@ -54,38 +97,7 @@ impl<'a, 'w> LocalObstacles<'a, 'w> {
                 .map(|q| Point2::new(f64::from(q.x), f64::from(q.y)))
                 .collect();
         }
-        let key = |q: &Point2| -> usize {
-            let bx = (((q.x - origin.x) / bucket).floor().max(0.0) as usize).min(nx - 1);
-            let by = (((q.y - origin.y) / bucket).floor().max(0.0) as usize).min(ny - 1);
-            by * nx + bx
-        };
-        let mut count = vec![0u32; nx * ny + 1];
-        for q in &raw {
-            count[key(q) + 1] += 1;
-        }
-        for b in 1..count.len() {
-            count[b] += count[b - 1];
-        }
-        let (cnx, cny) = (nx.div_ceil(4), ny.div_ceil(4));
-        let mut coarse = vec![false; cnx * cny];
-        for by in 0..ny {
-            for bx in 0..nx {
-                if count[by * nx + bx + 1] > count[by * nx + bx] {
-                    coarse[(by / 4) * cnx + bx / 4] = true;
-                }
-            }
-        }
-        let mut fill = count.clone();
-        let mut pts = vec![Point2::origin(); raw.len()];
-        for q in raw {
-            let b = key(&q);
-            pts[fill[b] as usize] = q;
-            fill[b] += 1;
-        }
-        // Clamping in `key` only moves points that lie outside the box into edge buckets; queries stay a
-        // radius inside it, so every point they need is in a bucket the scan visits.
-        let ok = lo.x.is_finite() && lo.y.is_finite() && hi.x.is_finite() && hi.y.is_finite();
-        Self {
+        let mut me = Self {
             world,
             lo: if ok {
                 lo
@@ -101,92 +113,131 @@ impl<'a, 'w> LocalObstacles<'a, 'w> {
             bucket,
             nx,
             ny,
-            start: count,
-            pts,
-            coarse,
-            cnx,
-            cny,
+            start: Vec::new(),
+            pts: Vec::new(),
+            sat: Vec::new(),
             radius,
             band: std::f64::consts::SQRT_2 * world.resolution(),
+        };
+        // Counting sort by bucket.
+        let keys: Vec<u32> = raw.iter().map(|q| (me.row(q.y) * nx + me.col(q.x)) as u32).collect();
+        let mut start = vec![0u32; nx * ny + 1];
+        for &k in &keys {
+            start[k as usize + 1] += 1;
         }
-    }
-
-    /// Bucket coordinate of `v` metres from the origin (clamped to the grid).
-    #[inline]
-    fn coord(&self, v: f64, n: usize) -> usize {
-        let q = v / self.bucket;
-        // floor without a libm call (baseline x86-64 has no rounding instruction).
-        let t = q as i64;
-        let f = if (t as f64) > q { t - 1 } else { t };
-        f.clamp(0, n as i64 - 1) as usize
-    }
-
-    /// The nearest live point within the radius: buckets in rings of growing Chebyshev distance around the
-    /// query's own, stopping when a ring cannot hold anything nearer than the best so far (every bucket of
-    /// ring k is at least (k − 1) bucket sides from the query).
-    fn live_within(&self, p: Point2) -> Option<(Point2, f64)> {
-        let b = self.bucket;
-        let cx = self.coord(p.x - self.origin.x, self.nx) as isize;
-        let cy = self.coord(p.y - self.origin.y, self.ny) as isize;
-        let (nx, ny) = (self.nx as isize, self.ny as isize);
-        // Every point within the radius (≤ 4 buckets) lies in the 3 × 3 coarse cells around the query's.
-        let (ccx, ccy) = (cx / 4, cy / 4);
-        let (cnx, cny) = (self.cnx as isize, self.cny as isize);
-        let mut any = false;
-        for y in (ccy - 1).max(0)..=(ccy + 1).min(cny - 1) {
-            for x in (ccx - 1).max(0)..=(ccx + 1).min(cnx - 1) {
-                any |= self.coarse[(y * cnx + x) as usize];
+        for b in 1..start.len() {
+            start[b] += start[b - 1];
+        }
+        let mut fill = start.clone();
+        let mut pts = vec![Point2::origin(); raw.len()];
+        for (q, &k) in raw.iter().zip(&keys) {
+            pts[fill[k as usize] as usize] = *q;
+            fill[k as usize] += 1;
+        }
+        let w = nx + 1;
+        let mut sat = vec![0u32; w * (ny + 1)];
+        for y in 0..ny {
+            let mut row_sum = 0u32;
+            for x in 0..nx {
+                let b = y * nx + x;
+                row_sum += start[b + 1] - start[b];
+                sat[(y + 1) * w + x + 1] = sat[y * w + x + 1] + row_sum;
             }
         }
-        if !any {
+        me.start = start;
+        me.pts = pts;
+        me.sat = sat;
+        me
+    }
+
+    /// Bucket column of map-frame x, clamped to the grid. Truncation is the floor here: a negative quotient
+    /// clamps to 0 either way (and NaN gives 0).
+    #[inline]
+    fn col(&self, x: f64) -> usize {
+        (((x - self.origin.x) / self.bucket) as i64).clamp(0, self.nx as i64 - 1) as usize
+    }
+
+    /// Bucket row of map-frame y, clamped to the grid.
+    #[inline]
+    fn row(&self, y: f64) -> usize {
+        (((y - self.origin.y) / self.bucket) as i64).clamp(0, self.ny as i64 - 1) as usize
+    }
+
+    /// Points in buckets [x0, x1] × [y0, y1] (inclusive).
+    #[inline]
+    fn count(&self, x0: usize, x1: usize, y0: usize, y1: usize) -> u32 {
+        let w = self.nx + 1;
+        self.sat[(y1 + 1) * w + x1 + 1] + self.sat[y0 * w + x0]
+            - self.sat[y0 * w + x1 + 1]
+            - self.sat[(y1 + 1) * w + x0]
+    }
+
+    /// Scans buckets x0..=x1 of row y for a point nearer to `p` than `best` (squared distance).
+    #[inline]
+    fn scan(&self, y: usize, x0: usize, x1: usize, p: Point2, best: &mut (Point2, f64), found: &mut bool) {
+        let row = y * self.nx;
+        let (s, e) = (self.start[row + x0] as usize, self.start[row + x1 + 1] as usize);
+        for q in &self.pts[s..e] {
+            let d2 = (q - p).norm_squared();
+            if d2 < best.1 {
+                *best = (*q, d2);
+                *found = true;
+            }
+        }
+    }
+
+    /// Scans row y over the buckets within the best distance of `p`, the row's band lying `gap` metres
+    /// from `p` (0 for the query's own row).
+    #[inline]
+    fn scan_row(&self, y: usize, gap: f64, p: Point2, best: &mut (Point2, f64), found: &mut bool) {
+        // Every point of the row nearer than the best has |x − p.x| < √(best − gap²).
+        let half = (best.1 - gap * gap).max(0.0).sqrt() + SLACK_M;
+        self.scan(y, self.col(p.x - half), self.col(p.x + half), p, best, found);
+    }
+
+    /// The nearest live point within the radius (see the module docs), with its distance.
+    fn live_within(&self, p: Point2) -> Option<(Point2, f64)> {
+        let r = self.radius + SLACK_M;
+        let (x0, x1) = (self.col(p.x - r), self.col(p.x + r));
+        let (y0, y1) = (self.row(p.y - r), self.row(p.y + r));
+        if self.count(x0, x1, y0, y1) == 0 {
             return None;
         }
-        let rings = (self.radius / b).ceil() as isize + 1;
         let mut best = (Point2::origin(), self.radius * self.radius);
         let mut found = false;
-        let (ox, oy) = (self.origin.x, self.origin.y);
-        let mut visit = |bx: isize, by: isize, best: &mut (Point2, f64)| {
-            if bx < 0 || bx >= nx {
-                return;
-            }
-            // Skip a bucket that cannot hold anything nearer than the best so far.
-            let (xlo, ylo) = (ox + bx as f64 * b, oy + by as f64 * b);
-            let dx = (xlo - p.x).max(p.x - xlo - b).max(0.0);
-            let dy = (ylo - p.y).max(p.y - ylo - b).max(0.0);
-            if dx * dx + dy * dy >= best.1 {
-                return;
-            }
-            let cell = (by * nx + bx) as usize;
-            let (s, e) = (self.start[cell] as usize, self.start[cell + 1] as usize);
-            for q in &self.pts[s..e] {
-                let d2 = (q - p).norm_squared();
-                if d2 < best.1 {
-                    *best = (*q, d2);
-                    found = true;
-                }
-            }
-        };
-        for k in 0..=rings {
-            if k >= 2 {
-                let gap = (k - 1) as f64 * b;
-                if gap * gap >= best.1 {
-                    break;
-                }
-            }
-            for dy in -k..=k {
-                let by = cy + dy;
-                if by < 0 || by >= ny {
-                    continue;
-                }
-                if dy.abs() == k {
-                    for dx in -k..=k {
-                        visit(cx + dx, by, &mut best);
-                    }
+        let (cx, cy) = (self.col(p.x), self.row(p.y));
+        // The own bucket first: inside a cluster it holds a near point, which narrows every row after it.
+        self.scan(cy, cx, cx, p, &mut best, &mut found);
+        self.scan_row(cy, 0.0, p, &mut best, &mut found);
+        let (b, oy) = (self.bucket, self.origin.y);
+        let (mut down, mut up) = (cy > y0, cy < y1);
+        let mut k = 1;
+        while down || up {
+            if up {
+                let y = cy + k;
+                // The band of row y starts at oy + y·b, above p.
+                let gap = (oy + y as f64 * b - p.y - SLACK_M).max(0.0);
+                if y > y1 || gap * gap >= best.1 {
+                    up = false;
                 } else {
-                    visit(cx - k, by, &mut best);
-                    visit(cx + k, by, &mut best);
+                    self.scan_row(y, gap, p, &mut best, &mut found);
                 }
             }
+            if down {
+                if k > cy {
+                    down = false;
+                } else {
+                    let y = cy - k;
+                    // The band of row y ends at oy + (y + 1)·b, below p.
+                    let gap = (p.y - (oy + (y + 1) as f64 * b) - SLACK_M).max(0.0);
+                    if y < y0 || gap * gap >= best.1 {
+                        down = false;
+                    } else {
+                        self.scan_row(y, gap, p, &mut best, &mut found);
+                    }
+                }
+            }
+            k += 1;
         }
         found.then(|| (best.0, best.1.sqrt()))
     }
@@ -215,26 +266,144 @@ mod tests {
     use super::*;
     use crate::correct::tests::{Site, blob, walled};
 
+    /// The nearest live point of `p` by brute force over the tree's points, with its distance.
+    fn brute(site: &Site, p: Point2) -> Option<f64> {
+        site.tree
+            .within_box(&Aabb::new(
+                Point3::new(f32::NEG_INFINITY, f32::NEG_INFINITY, f32::NEG_INFINITY),
+                Point3::new(f32::INFINITY, f32::INFINITY, f32::INFINITY),
+            ))
+            .into_iter()
+            .map(|q| (Point2::new(f64::from(q.x), f64::from(q.y)) - p).norm())
+            .min_by(f64::total_cmp)
+    }
+
+    /// Checks the cache against the world and brute force at a lattice of queries over [a, b].
+    fn check(site: &Site, lo: Point2, hi: Point2, radius: f64, a: Point2, b: Point2) -> usize {
+        let world = site.world();
+        let local = LocalObstacles::new(&world, lo, hi, radius);
+        let mut near = 0;
+        for k in 0..6400 {
+            let p = Point2::new(
+                a.x + (b.x - a.x) * f64::from(k % 80) / 79.0 + 1e-4 * f64::from(k % 7),
+                a.y + (b.y - a.y) * f64::from(k / 80) / 79.0,
+            );
+            let want = world.nearest_obstacle(p);
+            let got = local.nearest(p);
+            match (want, got) {
+                (Some((_, dw)), Some((q, dg))) => {
+                    assert!(
+                        (dw - dg).abs() < 1e-12 || (dw >= radius && dg >= radius),
+                        "at {p:?}: world {dw}, cache {dg}"
+                    );
+                    assert!(
+                        ((q - p).norm() - dg).abs() < 1e-12,
+                        "the point returned lies at its distance"
+                    );
+                }
+                (Some((_, dw)), None) => assert!(dw >= radius - 1e-12, "missed an obstacle at {dw} from {p:?}"),
+                (None, Some(_)) => panic!("invented an obstacle"),
+                (None, None) => {}
+            }
+            // The live part is the exact nearest of all points whenever within the radius.
+            let inside = p.x >= lo.x && p.y >= lo.y && p.x <= hi.x && p.y <= hi.y;
+            if inside && let Some(d) = brute(site, p).filter(|&d| d < radius) {
+                near += 1;
+                let (_, dl) = local.live_within(p).expect("a live point within the radius");
+                assert_eq!(dl, d, "live nearest at {p:?}");
+            } else if inside {
+                assert!(
+                    local.live_within(p).is_none(),
+                    "a live point beyond the radius at {p:?}"
+                );
+            }
+        }
+        near
+    }
+
     #[test]
     fn agrees_with_the_world_within_the_radius() {
         let mut grid = walled(8.0, 6.0);
         grid.fill_disk(Point2::new(5.0, 3.0), 0.3, crate::map::CellState::Occupied);
         let mut live = blob(Point2::new(3.0, 3.0), 0.4, 0.05);
+        live.extend(blob(Point2::new(6.2, 1.6), 0.15, 0.02));
         live.push(Point2::new(0.5, 0.5));
+        live.push(Point2::new(1.05, 4.95));
         let site = Site::new(grid, live);
-        let world = site.world();
-        let radius = 0.4;
-        let local = LocalObstacles::new(&world, Point2::new(1.0, 1.0), Point2::new(7.0, 5.0), radius);
-        for k in 0..4000 {
-            let p = Point2::new(0.2 + (k % 80) as f64 * 0.0951, 0.2 + (k / 80) as f64 * 0.1133);
-            let want = world.nearest_obstacle(p);
-            let got = local.nearest(p);
-            match (want, got) {
-                (Some((_, dw)), Some((_, dg))) => assert!((dw - dg).abs() < 1e-12 || (dw >= radius && dg >= radius)),
-                (Some((_, dw)), None) => assert!(dw >= radius - 1e-12, "missed an obstacle at {dw} from {p:?}"),
-                (None, Some(_)) => panic!("invented an obstacle"),
-                (None, None) => {}
+        let (lo, hi) = (Point2::new(1.0, 1.0), Point2::new(7.0, 5.0));
+        // Over the whole map (queries outside [lo, hi] go to the world) and zoomed on the dense blob.
+        let near = check(&site, lo, hi, 0.4, Point2::new(0.2, 0.2), Point2::new(7.8, 5.8));
+        assert!(near > 300, "only {near} queries had a live point near");
+        check(&site, lo, hi, 0.4, Point2::new(2.4, 2.4), Point2::new(3.6, 3.6));
+        // A tiny cache (one bucket) and a thin one.
+        check(
+            &site,
+            Point2::new(2.9, 2.9),
+            Point2::new(3.0, 3.0),
+            0.1,
+            Point2::new(2.7, 2.7),
+            Point2::new(3.2, 3.2),
+        );
+        check(
+            &site,
+            Point2::new(1.0, 3.0),
+            Point2::new(7.0, 3.0),
+            0.35,
+            Point2::new(0.8, 2.6),
+            Point2::new(7.2, 3.4),
+        );
+    }
+
+    #[test]
+    fn matches_brute_force_on_seeded_random_clouds() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(0x10ca1);
+        for _ in 0..12 {
+            let mut live = Vec::new();
+            for _ in 0..rng.random_range(1..5) {
+                let c = Point2::new(rng.random_range(1.0..9.0), rng.random_range(1.0..7.0));
+                let spread = rng.random_range(0.01..1.0);
+                for _ in 0..rng.random_range(1..400) {
+                    let (a, r) = (
+                        rng.random_range(0.0..std::f64::consts::TAU),
+                        spread * rng.random::<f64>().sqrt(),
+                    );
+                    live.push(c + nalgebra::Vector2::new(r * a.cos(), r * a.sin()));
+                }
+            }
+            let site = Site::new(walled(10.0, 8.0), live);
+            let world = site.world();
+            let lo = Point2::new(rng.random_range(0.5..4.0), rng.random_range(0.5..3.0));
+            let hi = lo + nalgebra::Vector2::new(rng.random_range(0.0..5.0), rng.random_range(0.0..4.0));
+            let radius = rng.random_range(0.05..0.8);
+            let local = LocalObstacles::new(&world, lo, hi, radius);
+            for _ in 0..1500 {
+                let p = Point2::new(rng.random_range(lo.x..=hi.x), rng.random_range(lo.y..=hi.y));
+                let want = brute(&site, p).filter(|&d| d < radius);
+                assert_eq!(local.live_within(p).map(|(_, d)| d), want, "at {p:?}, radius {radius}");
             }
         }
+    }
+
+    #[test]
+    fn a_huge_box_gets_larger_buckets_and_stays_exact() {
+        let grid = walled(8.0, 6.0);
+        let site = Site::new(grid, blob(Point2::new(3.0, 3.0), 0.4, 0.05));
+        let world = site.world();
+        let local = LocalObstacles::new(&world, Point2::new(-5e3, -5e3), Point2::new(5e3, 5e3), 0.4);
+        assert!(local.nx as f64 <= MAX_SIDE + 1.0 && (local.nx * local.ny) as f64 <= 1.01 * MAX_BUCKETS);
+        for p in [
+            Point2::new(3.0, 3.5),
+            Point2::new(3.3, 3.3),
+            Point2::new(2.0, 3.0),
+            Point2::new(3.0, 3.0),
+        ] {
+            let want = brute(&site, p).filter(|&d| d < 0.4);
+            assert_eq!(local.live_within(p).map(|(_, d)| d), want, "at {p:?}");
+        }
+        // A non-finite box answers everything from the world.
+        let local = LocalObstacles::new(&world, Point2::new(f64::NAN, 0.0), Point2::new(1.0, 1.0), 0.4);
+        let p = Point2::new(3.0, 3.5);
+        assert_eq!(local.nearest(p), world.nearest_obstacle(p));
     }
 }

@@ -42,6 +42,25 @@ pub use retime::{Retimed, TimedWaypoint, retime};
 pub use verify::{min_clearance, segment_clear, verify};
 pub use world::World;
 
+/// Benchmark hooks, not API: the IKD-SWOpt stage with another minimiser on the same window cost (the
+/// `correct` bench compares our L-BFGS with `argmin`'s there).
+#[doc(hidden)]
+pub mod hooks {
+    pub use super::lbfgs::{Minimum, Objective};
+    pub use super::repair::optimise_with;
+
+    /// Our L-BFGS as the repair runs it (memory, tolerances, preconditioner), as a solver for
+    /// [`optimise_with`].
+    pub fn ours(obj: &mut dyn Objective, x0: &[f64], max_iterations: u32) -> Minimum {
+        use super::optimize::{F_REL_TOL, G_TOL, MEMORY};
+        super::lbfgs::minimize(obj, x0, max_iterations, MEMORY, G_TOL, F_REL_TOL)
+    }
+
+    /// The gradient tolerance (largest component, J per metre) and relative decrease tolerance our L-BFGS
+    /// stops at.
+    pub const TOLERANCES: (f64, f64) = (super::optimize::G_TOL, super::optimize::F_REL_TOL);
+}
+
 use crate::geom::Point2;
 
 /// Which strategy produced a [`Repair`].

@@ -14,19 +14,21 @@
 use crate::geom::{Point2, Vector2};
 
 use super::cost::{Obstacles, Weights, WindowCost};
-use super::lbfgs::minimize;
+use super::lbfgs::Minimum;
 use super::params::CorrectParams;
 use super::path::Arclen;
 use super::verify::verify;
 use super::world::World;
 
+/// L-BFGS memory (curvature pairs kept).
+pub(crate) const MEMORY: usize = 6;
 /// L-BFGS stops when no gradient component exceeds this (J per metre of displacement; the obstacle term's
 /// gradient is 4·w_obs·h·deficit/margin², so this is a sub-micrometre penetration at the defaults).
-const G_TOL: f64 = 1e-3;
+pub(crate) const G_TOL: f64 = 1e-3;
 /// L-BFGS stops when two iterations in a row lower J by less than this fraction: past that the patch moves
 /// by well under a millimetre (the first, Newton-like step does most of the work; the tail only settles
 /// which points touch the d_safe hinge), and `verify` decides feasibility anyway.
-const F_REL_TOL: f64 = 1e-3;
+pub(crate) const F_REL_TOL: f64 = 1e-3;
 
 /// Most intervals a window is resampled into.
 const MAX_POINTS: usize = 1000;
@@ -201,13 +203,33 @@ fn lateral_start<O: Obstacles>(
 }
 
 /// Optimises one window: from the original points and the two lateral starts (best first, only those not
-/// costlier than the original), keeping the first verified optimum, else the cheapest.
+/// costlier than the original), keeping the first verified optimum, else the cheapest (with our L-BFGS, as
+/// the repair runs it; tests call it directly).
+#[cfg(test)]
 pub(crate) fn optimise_window<O: Obstacles>(
     win: &Window,
     obstacles: &O,
     world: &World<'_>,
     p: &CorrectParams,
 ) -> Optimised {
+    optimise_window_with(win, obstacles, world, p, &mut |cost, x0| {
+        super::lbfgs::minimize(cost, x0, p.max_iterations, MEMORY, G_TOL, F_REL_TOL)
+    })
+}
+
+/// [`optimise_window`] with another minimiser (bench comparisons): `solve(cost, x0)` must return a point
+/// no costlier than `x0`, with its cost.
+pub(crate) fn optimise_window_with<O, S>(
+    win: &Window,
+    obstacles: &O,
+    world: &World<'_>,
+    p: &CorrectParams,
+    solve: &mut S,
+) -> Optimised
+where
+    O: Obstacles,
+    S: FnMut(&mut WindowCost<'_, O>, &[f64]) -> Minimum,
+{
     let w = weights(p, win.h);
     let mut cost = WindowCost::new(win.head, win.tail, w, obstacles, win.free.len());
     let max_offset = 0.5 * (win.s1 - win.s0);
@@ -227,7 +249,7 @@ pub(crate) fn optimise_window<O: Obstacles>(
     let mut iterations = 0;
     let mut best: Option<Optimised> = None;
     for (_, x0) in starts {
-        let min = minimize(&mut cost, &x0, p.max_iterations, 6, G_TOL, F_REL_TOL);
+        let min = solve(&mut cost, &x0);
         iterations += min.iterations;
         let points = win.with_free(&unflatten(&min.x));
         let feasible = verify(&points, world, p.robot_radius_m);

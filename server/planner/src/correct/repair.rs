@@ -7,8 +7,9 @@ use super::cost::WindowCost;
 use super::detour::{LocalGrid, shortcut_chain};
 use super::error::CorrectError;
 use super::judge::{Breach, sample_step};
+use super::lbfgs::{Minimum, Objective, minimize};
 use super::local::LocalObstacles;
-use super::optimize::{Window, end_segment, optimise_window, start_segment, weights};
+use super::optimize::{F_REL_TOL, G_TOL, MEMORY, Window, end_segment, optimise_window_with, start_segment, weights};
 use super::params::CorrectParams;
 use super::path::Arclen;
 use super::verify::{segment_clear, verify};
@@ -53,6 +54,22 @@ pub fn optimise(
     let (r, s_a, s_b) = prepare(path, breach, world, p)?;
     let mut plan = r.windows(s_a, s_b)?;
     Ok(r.optimise(&mut plan))
+}
+
+/// Bench hook, not API ([`super::hooks`]): [`optimise`] with another minimiser in place of our L-BFGS.
+/// `solve(objective, x0)` minimises the window cost (`objective.eval` gives J and its gradient; its
+/// `precondition` is ours to use or ignore) from `x0` and must return a point no costlier than `x0`.
+#[doc(hidden)]
+pub fn optimise_with(
+    path: &[Point2],
+    breach: &Breach,
+    world: &World<'_>,
+    p: &CorrectParams,
+    solve: &mut dyn FnMut(&mut dyn Objective, &[f64]) -> Minimum,
+) -> Result<Option<Repair>, CorrectError> {
+    let (r, s_a, s_b) = prepare(path, breach, world, p)?;
+    let mut plan = r.windows(s_a, s_b)?;
+    Ok(r.optimise_with(&mut plan, &mut |cost, x0| solve(cost, x0)))
 }
 
 /// Checks the input and sets up a repair: the repairer and the breach's arc lengths.
@@ -135,7 +152,7 @@ struct Repairer<'a, 'w> {
     h: f64,
 }
 
-impl Repairer<'_, '_> {
+impl<'w> Repairer<'_, 'w> {
     /// Compliant as the judge means it: d_safe from live obstacles, the radius from the static map.
     fn compliant(&self, s: f64) -> bool {
         let q = self.arc.point_at(s);
@@ -267,12 +284,23 @@ impl Repairer<'_, '_> {
     /// IKD-SWOpt over the plan's windows.
     fn optimise(&self, plan: &mut Plan) -> Option<Repair> {
         let p = self.p;
+        self.optimise_with(plan, &mut |cost, x0| {
+            minimize(cost, x0, p.max_iterations, MEMORY, G_TOL, F_REL_TOL)
+        })
+    }
+
+    /// IKD-SWOpt over the plan's windows, minimising with `solve`.
+    fn optimise_with<S>(&self, plan: &mut Plan, solve: &mut S) -> Option<Repair>
+    where
+        S: for<'c, 'l> FnMut(&mut WindowCost<'c, LocalObstacles<'l, 'w>>, &[f64]) -> Minimum,
+    {
+        let p = self.p;
         for win in &plan.usable {
             let (lo, hi) = bbox(&win.with_free(&win.free));
             let reach = 0.5 * (win.s1 - win.s0) + p.d_safe() + p.margin_m;
             let pad = Point2::new(reach, reach).coords;
             let local = LocalObstacles::new(self.world, lo - pad, hi + pad, p.d_safe() + p.margin_m);
-            let opt = optimise_window(win, &local, self.world, p);
+            let opt = optimise_window_with(win, &local, self.world, p, solve);
             plan.iterations += opt.iterations;
             if plan.costs.is_none() {
                 plan.costs = Some((opt.cost_before, opt.cost_after));
@@ -460,7 +488,7 @@ pub(crate) fn trace_windows(
             let local = LocalObstacles::new(world, lo - pad, hi + pad, p.d_safe() + p.margin_m);
             println!("    local cache {:?}", t.elapsed());
             let t = std::time::Instant::now();
-            let o = optimise_window(win, &local, world, p);
+            let o = super::optimize::optimise_window(win, &local, world, p);
             println!("    optimise_window {:?}", t.elapsed());
             let t = std::time::Instant::now();
             let _ = verify(&o.points, world, p.robot_radius_m);

@@ -413,3 +413,61 @@ fn trace_windows_bench_like() {
         }
     }
 }
+
+/// `worth_publishing`'s decision boundary: a collision (breach clearance under the radius) is always
+/// published; a margin-only breach only for an optimised patch whose clearance (capped at d_safe) beats the
+/// breach's by more than 1 cm.
+#[test]
+fn worth_publishing_boundary() {
+    // One live point at (5, 5) in a 10 m box: a straight patch at height c above it has clearance c.
+    let site = Site::new(walled(10.0, 10.0), vec![Point2::new(5.0, 5.0)]);
+    let world = site.world();
+    let p = CorrectParams::default();
+    let (r, d_safe) = (p.robot_radius_m, p.d_safe());
+    let patch = |kind: RepairKind, c: f64| Repair {
+        from: 1,
+        to: 2,
+        waypoints: vec![Point2::new(4.0, 5.0 + c), Point2::new(6.0, 5.0 + c)],
+        kind,
+        iterations: 0,
+        cost_before: 0.0,
+        cost_after: 0.0,
+        skipped: Vec::new(),
+    };
+    // The patches' clearances are what the rule measures.
+    for c in [0.29, 0.305, 0.309, 0.311, 0.32, 0.5] {
+        let got = min_clearance(&patch(RepairKind::Optimised, c).waypoints, &world, d_safe);
+        assert!((got - c.min(d_safe)).abs() < 1e-9, "clearance {got} for a patch at {c}");
+    }
+    let breach = |m: f64| Breach {
+        start: PathPos::new(0, 0.4),
+        end: PathPos::new(0, 0.6),
+        cost: 0.1,
+        min_clearance_m: m,
+        earliest: PathPos::new(0, 0.0),
+    };
+    let worth = |m: f64, kind: RepairKind, c: f64| worth_publishing(&breach(m), &patch(kind, c), &world, &p);
+    use RepairKind::{Detour, Optimised, Skipped};
+    // A collision: every kind, even a patch that clears no better than the breach.
+    for kind in [Optimised, Detour, Skipped] {
+        assert!(worth(0.0, kind, r), "{kind:?} for a collision");
+        assert!(worth(r - 1e-4, kind, r), "{kind:?} just under the radius");
+    }
+    assert!(worth(0.2, Optimised, 0.2));
+    // At the radius and above it is a margin-only breach: a detour or skip never is, however clear.
+    for m in [r, r + 0.01, d_safe - 0.001] {
+        assert!(!worth(m, Detour, 0.5), "detour at {m}");
+        assert!(!worth(m, Skipped, 0.5), "skip at {m}");
+    }
+    // An optimised patch must beat the breach by more than 1 cm.
+    assert!(worth(r, Optimised, r + 0.011));
+    assert!(worth(r, Optimised, 0.32));
+    assert!(!worth(r, Optimised, r + 0.009));
+    assert!(!worth(r, Optimised, 0.305));
+    assert!(!worth(r, Optimised, r));
+    assert!(worth(0.33, Optimised, 0.5));
+    // Its clearance counts only up to d_safe, so within 1 cm of d_safe nothing is worth it.
+    assert!(!worth(d_safe - 0.009, Optimised, 0.5));
+    assert!(!worth(d_safe, Optimised, 0.5));
+    assert!(worth(d_safe - 0.011, Optimised, 0.5));
+}

@@ -111,7 +111,9 @@ impl GridGeometry {
         if !(fx >= 0.0 && fy >= 0.0) {
             return None;
         }
-        let (x, y) = (fx.floor() as usize, fy.floor() as usize);
+        // Truncation is the floor for these non-negative values (and saturates for +inf, which fails below);
+        // `floor` is a library call on baseline x86-64.
+        let (x, y) = (fx as usize, fy as usize);
         (x < self.width && y < self.height).then_some(Cell::new(x, y))
     }
 
