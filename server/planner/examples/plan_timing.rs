@@ -1,10 +1,12 @@
 //! Times each stage of a default plan on generated cluttered sites of growing size:
-//! `cargo run --release -p shift-planner --example plan_timing -- [SIDE_M ...]`.
+//! `cargo run --release -p shift-planner --example plan_timing -- [SIDE_M ...]`; `first_region_ms` is when
+//! the first region of the final plan was ready (streamed to clients while the rest link). `STAGES=1`
+//! prints the progress timeline; `DECOMP` and `PLACE` fix the strategy.
 
 use std::time::Instant;
 
 use shift_planner::geom::Point2;
-use shift_planner::pipeline::{PlanMonitor, PlanParams, plan};
+use shift_planner::pipeline::{PlanMonitor, PlanParams, RegionSummary, plan};
 use shift_planner::space::{CoverageSpace, RobotShape};
 use shift_planner::testing::cluttered_site;
 
@@ -29,7 +31,7 @@ fn main() {
         .expect("space");
         let space_ms = t.elapsed().as_secs_f64() * 1e3;
         let t = Instant::now();
-        let mut stages = Stages(Instant::now(), Vec::new());
+        let mut stages = Stages(Instant::now(), Vec::new(), None);
         let out = plan(&space, &params(), &mut stages).expect("plan");
         if std::env::var("STAGES").is_ok() {
             eprintln!("stages (progress, ms): {:?}", stages.1);
@@ -37,8 +39,9 @@ fn main() {
         let plan_ms = t.elapsed().as_secs_f64() * 1e3;
         let m = out.metrics;
         println!(
-            "{{\"side_m\": {side}, \"cells\": {}, \"space_ms\": {space_ms:.0}, \"plan_ms\": {plan_ms:.0}, \"regions\": {}, \"coverage_pct\": {:.2}, \"overlap_pct\": {:.2}, \"collisions\": {}, \"chose\": \"{}/{}/{:?}\"}}",
+            "{{\"side_m\": {side}, \"cells\": {}, \"space_ms\": {space_ms:.0}, \"plan_ms\": {plan_ms:.0}, \"first_region_ms\": {}, \"regions\": {}, \"coverage_pct\": {:.2}, \"overlap_pct\": {:.2}, \"collisions\": {}, \"chose\": \"{}/{}/{:?}\"}}",
             space.geometry().len(),
+            stages.2.map_or(-1, |t| t as i64),
             out.regions.len(),
             m.coverage_pct,
             m.overlap_pct,
@@ -68,11 +71,14 @@ fn params() -> PlanParams {
     p
 }
 
-/// Records elapsed milliseconds at every progress report.
-struct Stages(Instant, Vec<(f64, u64)>);
+/// Records elapsed milliseconds at every progress report and when the first region is ready.
+struct Stages(Instant, Vec<(f64, u64)>, Option<u64>);
 
 impl PlanMonitor for Stages {
     fn progress(&mut self, fraction: f64) {
         self.1.push((fraction, self.0.elapsed().as_millis() as u64));
+    }
+    fn region_ready(&mut self, _region: &RegionSummary, _path: &[Point2]) {
+        self.2.get_or_insert(self.0.elapsed().as_millis() as u64);
     }
 }

@@ -17,8 +17,7 @@ use super::{PlanMonitor, PlanOutput, PlanStats, RegionSummary, Waypoint, Waypoin
 pub fn assemble(space: &CoverageSpace, prepared: Prepared, monitor: &mut dyn PlanMonitor) -> Result<PlanOutput> {
     let Prepared {
         params,
-        regions,
-        cells,
+        basis,
         tasks,
         angles,
         options,
@@ -55,7 +54,7 @@ pub fn assemble(space: &CoverageSpace, prepared: Prepared, monitor: &mut dyn Pla
                 }
             }
         }
-        let s = summary(space, &cells[id], id, angles[id]);
+        let s = summary(space, &basis.cells[id], id, angles[id]);
         let region_path: Vec<Point2> = path.waypoints[first..].iter().map(|w| w.position).collect();
         monitor.region_ready(&s, &region_path);
         summaries.push(s);
@@ -73,7 +72,7 @@ pub fn assemble(space: &CoverageSpace, prepared: Prepared, monitor: &mut dyn Pla
     Ok(PlanOutput {
         waypoints,
         regions: summaries,
-        labels: regions.labels,
+        labels: basis.regions.labels.clone(),
         metrics,
         stats,
         warnings,

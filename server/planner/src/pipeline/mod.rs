@@ -47,6 +47,9 @@ pub struct PlanParams {
     pub targeted_passes: bool,
     /// Targeted-pass knobs.
     pub passes: PassParams,
+    /// Threads that prepare a portfolio's strategies side by side (0: one per core). The plan does not
+    /// depend on it.
+    pub threads: usize,
 }
 
 impl Default for PlanParams {
@@ -62,6 +65,7 @@ impl Default for PlanParams {
             order_iterations: 200_000,
             targeted_passes: true,
             passes: PassParams::default(),
+            threads: 0,
         }
     }
 }

@@ -5,33 +5,71 @@
 //! Ranking: plans that meet the coverage bar beat those that do not; then the least estimated overlap
 //! (DESIGN §6: for equal coverage, the shortest path); earlier members win ties.
 
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
 use crate::decompose::DecompositionMethod;
 use crate::error::{PlannerError, Result};
-use crate::geom::Point2;
 use crate::pattern::PatternMethod;
 use crate::pattern::lanes::{LaneParams, Placement};
 use crate::space::CoverageSpace;
 
 use super::assemble::assemble;
-use super::prepare::{Estimate, Prepared, prepare};
-use super::{AUTO_SPIRAL_MAX_CELLS, FRAMED_MAX_CELLS, PlanMonitor, PlanOutput, PlanParams, RegionSummary};
+use super::prepare::{Basis, Estimate, Prepared, nearest_reachable, prepare};
+use super::{AUTO_SPIRAL_MAX_CELLS, FRAMED_MAX_CELLS, PlanMonitor, PlanOutput, PlanParams};
 
 /// Share of the progress bar the preparations take (the rest is linking the winner).
 const PREPARE_SHARE: f64 = 0.75;
 
-/// See the module docs.
+/// How often the calling thread polls its monitor for cancellation while workers prepare.
+const POLL: Duration = Duration::from_millis(10);
+
+/// See the module docs. The strategies are prepared on [`PlanParams::threads`] worker threads while the
+/// calling thread relays cancellation and progress; decompositions shared by several strategies are built
+/// once. Which strategy wins does not depend on the threads: every one is prepared and they are ranked in
+/// member order.
 pub fn plan(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanMonitor) -> Result<PlanOutput> {
     let members = members(space, params);
     let n = members.len();
+    let threads = match params.threads {
+        0 => std::thread::available_parallelism().map_or(1, |t| t.get()),
+        t => t,
+    }
+    .clamp(1, n.max(1));
+    let nearest = nearest_reachable(space);
+    // One basis per distinct decomposition, in first-use order.
+    let mut kinds: Vec<DecompositionMethod> = Vec::new();
+    for m in &members {
+        if !kinds.contains(&m.decomposition) {
+            kinds.push(m.decomposition);
+        }
+    }
+    let cancel = AtomicBool::new(false);
+    let bases: Vec<Option<Arc<Basis>>> = run_parallel(threads, kinds.len(), monitor, &cancel, (0.0, 0.1), |k| {
+        let member = members.iter().find(|m| m.decomposition == kinds[k])?;
+        (!cancel.load(Ordering::Relaxed)).then(|| Arc::new(Basis::new(space, member, &nearest)))
+    })
+    .into_iter()
+    .map(Option::flatten)
+    .collect();
+    let basis_of = |m: &PlanParams| {
+        kinds
+            .iter()
+            .position(|&d| d == m.decomposition)
+            .and_then(|k| bases[k].clone())
+    };
+    let prepared = run_parallel(threads, n, monitor, &cancel, (0.1, PREPARE_SHARE), |k| {
+        let basis = basis_of(&members[k]).ok_or(PlannerError::Cancelled)?;
+        prepare(space, &members[k], (basis, &nearest), &mut Relay(&cancel))
+    });
+    if monitor.cancelled() || cancel.load(Ordering::Relaxed) {
+        return Err(PlannerError::Cancelled);
+    }
     let target = params.passes.coverage_target_pct.min(99.0);
     let mut best: Option<Prepared> = None;
-    for (k, member) in members.iter().enumerate() {
-        let mut scaled = Scaled {
-            inner: &mut *monitor,
-            lo: PREPARE_SHARE * k as f64 / n as f64,
-            span: 1.0 / n as f64,
-        };
-        let candidate = prepare(space, member, &mut scaled)?;
+    for p in prepared {
+        let candidate = p.ok_or(PlannerError::Cancelled)??;
         if best
             .as_ref()
             .is_none_or(|b| better(&candidate.estimate, &b.estimate, target))
@@ -41,6 +79,66 @@ pub fn plan(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanMo
     }
     let best = best.ok_or(PlannerError::Cancelled)?;
     assemble(space, best, monitor)
+}
+
+/// Runs `job(0..count)` on up to `threads` scoped threads while the calling thread polls `monitor`: it
+/// raises `cancel` when the monitor asks, and reports progress from `lo` to `hi` as jobs finish. Results
+/// come back in job order. A panicking job ends the wait (the scope then re-raises the panic).
+fn run_parallel<T: Send>(
+    threads: usize,
+    count: usize,
+    monitor: &mut dyn PlanMonitor,
+    cancel: &AtomicBool,
+    (lo, hi): (f64, f64),
+    job: impl Fn(usize) -> T + Sync,
+) -> Vec<Option<T>> {
+    /// Counts a worker out when it ends, by return or by unwinding.
+    struct Leaving<'a>(&'a AtomicUsize);
+    impl Drop for Leaving<'_> {
+        fn drop(&mut self) {
+            self.0.fetch_sub(1, Ordering::Release);
+        }
+    }
+    let slots: Mutex<Vec<Option<T>>> = Mutex::new((0..count).map(|_| None).collect());
+    let finished = AtomicUsize::new(0);
+    let next = AtomicUsize::new(0);
+    let workers = threads.clamp(1, count.max(1));
+    let running = AtomicUsize::new(workers);
+    let work = || {
+        let _leaving = Leaving(&running);
+        loop {
+            let k = next.fetch_add(1, Ordering::Relaxed);
+            if k >= count {
+                break;
+            }
+            let out = job(k);
+            if let Ok(mut s) = slots.lock() {
+                s[k] = Some(out);
+            }
+            finished.fetch_add(1, Ordering::Release);
+        }
+    };
+    std::thread::scope(|scope| {
+        for _ in 0..workers {
+            scope.spawn(work);
+        }
+        let mut reported = 0;
+        loop {
+            if monitor.cancelled() {
+                cancel.store(true, Ordering::Relaxed);
+            }
+            let done = finished.load(Ordering::Acquire);
+            if done > reported {
+                reported = done;
+                monitor.progress(lo + (hi - lo) * done as f64 / count.max(1) as f64);
+            }
+            if done >= count || running.load(Ordering::Acquire) == 0 {
+                break;
+            }
+            std::thread::sleep(POLL);
+        }
+    });
+    slots.into_inner().unwrap_or_default()
 }
 
 /// The strategies `params` leaves open, in tie-breaking order.
@@ -101,21 +199,13 @@ fn better(a: &Estimate, b: &Estimate, target_pct: f64) -> bool {
     }
 }
 
-/// Maps a member's preparation progress (0 … [`PREPARE_SHARE`]) into its slice of the bar.
-struct Scaled<'a> {
-    inner: &'a mut dyn PlanMonitor,
-    lo: f64,
-    span: f64,
-}
+/// A worker's monitor: cancelled when the calling thread raised the flag; progress is reported per job.
+struct Relay<'a>(&'a AtomicBool);
 
-impl PlanMonitor for Scaled<'_> {
-    fn progress(&mut self, fraction: f64) {
-        self.inner.progress(self.lo + self.span * fraction);
-    }
+impl PlanMonitor for Relay<'_> {
     fn cancelled(&self) -> bool {
-        self.inner.cancelled()
+        self.0.load(Ordering::Relaxed)
     }
-    fn region_ready(&mut self, _region: &RegionSummary, _path: &[Point2]) {}
 }
 
 #[cfg(test)]
@@ -149,6 +239,24 @@ mod tests {
             ..PlanParams::default()
         };
         assert_eq!(members(&space, &fixed), vec![fixed]);
+    }
+
+    #[test]
+    fn the_plan_does_not_depend_on_the_threads() {
+        let space = random_space(11, 60, 45, 5).expect("space");
+        let with = |threads| {
+            let params = PlanParams {
+                threads,
+                ..PlanParams::default()
+            };
+            super::plan(&space, &params, &mut crate::pipeline::NoMonitor).expect("plan")
+        };
+        let one = with(1);
+        for threads in [2, 5] {
+            let other = with(threads);
+            assert_eq!(other.points(), one.points(), "{threads} threads");
+            assert_eq!(other.decomposition, one.decomposition);
+        }
     }
 
     #[test]

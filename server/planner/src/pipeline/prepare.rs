@@ -2,6 +2,8 @@
 //! routes → tour. A [`Prepared`] plan knows its coverage and, from the tour's cost, its length closely
 //! enough to rank it against other strategies before any link is searched ([`Prepared::estimate`]).
 
+use std::sync::Arc;
+
 use crate::decompose::{DecomposeParams, NO_REGION, Regions, decompose};
 use crate::error::{PlannerError, Result};
 use crate::geom::{Point2, polyline_length};
@@ -24,10 +26,8 @@ use super::{PlanMonitor, PlanParams};
 pub struct Prepared {
     /// The request's parameters (with the placement this plan used).
     pub params: PlanParams,
-    /// The regions.
-    pub regions: Regions,
-    /// Cells of every region.
-    pub cells: Vec<Vec<usize>>,
+    /// The decomposition (shared by the strategies that use it).
+    pub basis: Arc<Basis>,
     /// Tasks of every region (pattern and targeted passes).
     pub tasks: Vec<Vec<Task>>,
     /// Lane angle of every region, radians.
@@ -64,8 +64,78 @@ impl Estimate {
     }
 }
 
-/// Runs the stages up to the tour; `monitor` sees progress 0.1 … 0.75 and may cancel between stages.
-pub fn prepare(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanMonitor) -> Result<Prepared> {
+/// The distance field whose sites are the reachable cells (each coverable cell is served by the region of
+/// its nearest reachable cell); the same for every strategy on a space.
+pub fn nearest_reachable(space: &CoverageSpace) -> DistanceField {
+    DistanceField::compute(*space.geometry(), |i| space.reachable[i], false)
+}
+
+/// What every strategy with the same decomposition shares: the regions and each one's cover targets.
+#[derive(Debug, Clone)]
+pub struct Basis {
+    /// The regions.
+    pub regions: Regions,
+    /// Region responsible for each coverable cell (that of its nearest reachable cell), or `NO_REGION`.
+    pub target_labels: Vec<u32>,
+    /// Cells of every region.
+    pub cells: Vec<Vec<usize>>,
+    /// Cover targets of every region.
+    pub targets: Vec<Vec<usize>>,
+}
+
+impl Basis {
+    /// Decomposes `space` with `params`' decomposition and assigns the cover targets.
+    pub fn new(space: &CoverageSpace, params: &PlanParams, nearest_reachable: &DistanceField) -> Self {
+        let decompose_params = DecomposeParams {
+            seed: params.seed,
+            ..params.decompose
+        };
+        let regions = decompose(space, params.decomposition, &decompose_params);
+        let g = space.geometry();
+        let target_labels: Vec<u32> = (0..g.len())
+            .map(|i| {
+                if !space.coverable[i] {
+                    return NO_REGION;
+                }
+                nearest_reachable
+                    .nearest_site_index(i)
+                    .map_or(NO_REGION, |r| regions.labels[r])
+            })
+            .collect();
+        let cells = regions.cells();
+        let mut targets = vec![Vec::new(); regions.count];
+        for (i, &l) in target_labels.iter().enumerate() {
+            if l != NO_REGION {
+                targets[l as usize].push(i);
+            }
+        }
+        Self {
+            regions,
+            target_labels,
+            cells,
+            targets,
+        }
+    }
+
+    fn view(&self, id: usize) -> RegionView<'_> {
+        RegionView {
+            id: id as u32,
+            labels: &self.regions.labels,
+            target_labels: &self.target_labels,
+            cells: &self.cells[id],
+            targets: &self.targets[id],
+        }
+    }
+}
+
+/// Runs the stages after the decomposition up to the tour, on `basis` (built for `params`' decomposition);
+/// `monitor` sees progress 0.1 … 0.75 and may cancel between stages.
+pub fn prepare(
+    space: &CoverageSpace,
+    params: &PlanParams,
+    (basis, nearest_reachable): (Arc<Basis>, &DistanceField),
+    monitor: &mut dyn PlanMonitor,
+) -> Result<Prepared> {
     let check = |m: &dyn PlanMonitor| {
         if m.cancelled() {
             Err(PlannerError::Cancelled)
@@ -74,40 +144,10 @@ pub fn prepare(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn Pla
         }
     };
     let g = *space.geometry();
-    let decompose_params = DecomposeParams {
-        seed: params.seed,
-        ..params.decompose
-    };
-    let regions = decompose(space, params.decomposition, &decompose_params);
     check(monitor)?;
     monitor.progress(0.1);
-
-    // Cover targets: each coverable cell belongs to the region of its nearest reachable cell.
-    let nearest_reachable = DistanceField::compute(g, |i| space.reachable[i], false);
-    let target_labels: Vec<u32> = (0..g.len())
-        .map(|i| {
-            if !space.coverable[i] {
-                return NO_REGION;
-            }
-            nearest_reachable
-                .nearest_site_index(i)
-                .map_or(NO_REGION, |r| regions.labels[r])
-        })
-        .collect();
-    let cells = regions.cells();
-    let mut targets = vec![Vec::new(); regions.count];
-    for (i, &l) in target_labels.iter().enumerate() {
-        if l != NO_REGION {
-            targets[l as usize].push(i);
-        }
-    }
-    let view = |id: usize| RegionView {
-        id: id as u32,
-        labels: &regions.labels,
-        target_labels: &target_labels,
-        cells: &cells[id],
-        targets: &targets[id],
-    };
+    let regions = &basis.regions;
+    let view = |id: usize| basis.view(id);
 
     // Main pattern per region, stamped so that the targeted passes see what every region already covers.
     let mut raster = CoverageRaster::new(g, space.robot.tool_width_m / 2.0);
@@ -162,7 +202,7 @@ pub fn prepare(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn Pla
     if params.targeted_passes {
         let mut pool = Vec::new();
         for id in 0..regions.count {
-            pool.extend(candidates(space, view(id), &raster, &nearest_reachable, &params.passes));
+            pool.extend(candidates(space, view(id), &raster, nearest_reachable, &params.passes));
         }
         let chosen = select(space, pool, &mut raster, &params.passes);
         let mut touched = vec![false; regions.count];
@@ -249,8 +289,7 @@ pub fn prepare(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn Pla
     let estimate = estimate(space, &driven, tour.cost);
     Ok(Prepared {
         params: params.clone(),
-        regions,
-        cells,
+        basis,
         tasks,
         angles,
         options,
