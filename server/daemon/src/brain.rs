@@ -276,6 +276,9 @@ impl Brain {
                     None => tracing::debug!("zenoh is disabled: the correction is only served over HTTP"),
                 },
                 Command::Publish(event) => {
+                    if let PlanEvent::RegionReady { plan_id, region } = &event {
+                        self.views.push_region(plan_id, region.clone());
+                    }
                     // No subscriber is not an error.
                     let _ = self.events.send(event);
                 }

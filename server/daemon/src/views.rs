@@ -5,7 +5,7 @@ use std::collections::{BTreeMap, HashMap};
 use std::sync::{Arc, RwLock};
 
 use shift_engine::PlanRecord;
-use shift_proto::{PlanDocument, RobotView, SiteSummary};
+use shift_proto::{PlanDocument, PlanStatus, RegionReady, RobotView, SiteSummary};
 
 /// One plan as the API shows it.
 #[derive(Debug, Clone)]
@@ -20,6 +20,9 @@ pub struct PlanView {
 #[derive(Debug, Default)]
 pub struct Views {
     plans: RwLock<HashMap<String, PlanView>>,
+    /// Regions streamed so far by plans that are still planning (for SSE clients that connect late); dropped
+    /// when the plan leaves `planning` (its document then holds everything).
+    regions: RwLock<HashMap<String, Vec<RegionReady>>>,
     sites: RwLock<BTreeMap<String, SiteSummary>>,
     robots: RwLock<BTreeMap<String, RobotView>>,
 }
@@ -35,8 +38,30 @@ impl Views {
         self.sites.read().ok()?.get(site).cloned()
     }
 
-    /// Sets a plan's record, keeping its document.
+    /// Regions a planning plan has streamed so far, in order.
+    pub fn regions_ready(&self, plan_id: &str) -> Vec<RegionReady> {
+        self.regions
+            .read()
+            .ok()
+            .and_then(|r| r.get(plan_id).cloned())
+            .unwrap_or_default()
+    }
+
+    /// Keeps a streamed region of a planning plan.
+    pub fn push_region(&self, plan_id: &str, region: RegionReady) {
+        if let Ok(mut r) = self.regions.write() {
+            r.entry(plan_id.to_owned()).or_default().push(region);
+        }
+    }
+
+    /// Sets a plan's record, keeping its document. A record that is not planning drops the regions streamed
+    /// before.
     pub fn set_record(&self, rec: PlanRecord) {
+        if rec.status != PlanStatus::Planning
+            && let Ok(mut r) = self.regions.write()
+        {
+            r.remove(&rec.plan_id);
+        }
         if let Ok(mut plans) = self.plans.write() {
             let id = rec.plan_id.clone();
             let doc = plans.get(&id).and_then(|v| v.doc.clone());

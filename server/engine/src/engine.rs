@@ -298,6 +298,7 @@ impl Engine {
                     && rec.status == PlanStatus::Planning
                 {
                     rec.regions_ready += 1;
+                    out.push(Command::UpdatePlan(rec.clone()));
                     out.push(Command::Publish(PlanEvent::RegionReady { plan_id, region }));
                 }
             }
