@@ -167,7 +167,13 @@ mod tests {
             .await;
         assert_eq!(
             names(&got),
-            vec!["status planning", "region 0", "region 1", "region 2", "status cancelled"]
+            vec![
+                "status planning",
+                "region 0",
+                "region 1",
+                "region 2",
+                "status cancelled"
+            ]
         );
     }
 

@@ -110,7 +110,10 @@ pub fn candidate_angles(space: &CoverageSpace, region: RegionView<'_>) -> Vec<f6
     out
 }
 
-fn best_angle(space: &CoverageSpace, region: RegionView<'_>, params: &LaneParams) -> f64 {
+/// The sweep direction of a region: the candidate whose lattice lanes are cheapest to sweep (length, steps
+/// and a turn cost per lane). It does not depend on the placement, so strategies that differ only in
+/// placement can share it.
+pub fn best_angle(space: &CoverageSpace, region: RegionView<'_>, params: &LaneParams) -> f64 {
     let w = space.robot.tool_width_m;
     let turn = params.turn_cost_m.unwrap_or(2.0 * w);
     candidate_angles(space, region)

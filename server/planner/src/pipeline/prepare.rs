@@ -2,7 +2,7 @@
 //! routes → tour. A [`Prepared`] plan knows its coverage and, from the tour's cost, its length closely
 //! enough to rank it against other strategies before any link is searched ([`Prepared::estimate`]).
 
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use crate::decompose::{DecomposeParams, NO_REGION, Regions, decompose};
 use crate::error::{PlannerError, Result};
@@ -13,7 +13,7 @@ use crate::metrics::CoverageRaster;
 use crate::order::{DistanceMatrix, SolveBudget, Tour, TourOption, TourProblem};
 use crate::pattern::boundary::{candidates, select};
 use crate::pattern::frame::frame_tasks;
-use crate::pattern::lanes::{Placement, RegionView, plan_lanes};
+use crate::pattern::lanes::{LaneParams, Placement, RegionView, best_angle, plan_lanes};
 use crate::pattern::spiral::plan_rings;
 use crate::pattern::{PatternMethod, Task};
 use crate::space::CoverageSpace;
@@ -81,6 +81,9 @@ pub struct Basis {
     pub cells: Vec<Vec<usize>>,
     /// Cover targets of every region.
     pub targets: Vec<Vec<usize>>,
+    /// Sweep direction of every region (the same for every lane placement), computed by the first strategy
+    /// with lanes that needs it.
+    lane_angles: OnceLock<Vec<f64>>,
 }
 
 impl Basis {
@@ -114,7 +117,23 @@ impl Basis {
             target_labels,
             cells,
             targets,
+            lane_angles: OnceLock::new(),
         }
+    }
+
+    /// The sweep direction of region `id` for `lanes` (fixed, or the shared best one).
+    fn lane_angle(&self, space: &CoverageSpace, id: usize, lanes: &LaneParams) -> f64 {
+        lanes.fixed_angle_rad.unwrap_or_else(|| {
+            self.lane_angles
+                .get_or_init(|| {
+                    (0..self.regions.count)
+                        .map(|k| best_angle(space, self.view(k), lanes))
+                        .collect()
+                })
+                .get(id)
+                .copied()
+                .unwrap_or(0.0)
+        })
     }
 
     fn view(&self, id: usize) -> RegionView<'_> {
@@ -148,6 +167,10 @@ pub fn prepare(
     monitor.progress(0.1);
     let regions = &basis.regions;
     let view = |id: usize| basis.view(id);
+    let fixed = |id: usize| LaneParams {
+        fixed_angle_rad: Some(basis.lane_angle(space, id, &params.lanes)),
+        ..params.lanes
+    };
 
     // Main pattern per region, stamped so that the targeted passes see what every region already covers.
     let mut raster = CoverageRaster::new(g, space.robot.tool_width_m / 2.0);
@@ -156,11 +179,11 @@ pub fn prepare(
     for id in 0..regions.count {
         let (angle, t) = match params.pattern {
             PatternMethod::Lanes if params.lanes.placement == Some(Placement::Framed) => {
-                let (angle, mut t) = plan_lanes(space, view(id), &params.lanes);
+                let (angle, mut t) = plan_lanes(space, view(id), &fixed(id));
                 t.extend(frame_tasks(space, view(id)));
                 (angle, t)
             }
-            PatternMethod::Lanes => plan_lanes(space, view(id), &params.lanes),
+            PatternMethod::Lanes => plan_lanes(space, view(id), &fixed(id)),
             PatternMethod::Spiral => (0.0, plan_rings(space, view(id))),
         };
         for task in &t {
