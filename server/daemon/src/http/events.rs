@@ -1,6 +1,8 @@
-//! `GET /v1/plans/{id}/events`: Server-Sent Events of one plan. The first event is the current status; then
-//! progress, region-ready and status events in the order the engine published them. The stream ends after a
-//! failed / cancelled / done status, and on shutdown (otherwise graceful shutdown would wait forever).
+//! `GET /v1/plans/{id}/events`: Server-Sent Events of one plan. The first event is the current status; for a
+//! plan still planning, the regions it already streamed follow (so a client that connects late can start a
+//! robot on them too); then progress, region-ready and status events in the order the engine published them.
+//! The stream ends after a failed / cancelled / done status, and on shutdown (otherwise graceful shutdown
+//! would wait forever).
 
 use std::collections::HashSet;
 use std::convert::Infallible;
