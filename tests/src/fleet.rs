@@ -10,6 +10,8 @@ use shift_proto::ros::{Header, Time};
 use shift_proto::{CorrectionDoc, PlanDocument};
 use zenoh::bytes::Encoding;
 
+use crate::TestServer;
+
 /// How long a poll waits before the test fails.
 pub const LONG: Duration = Duration::from_secs(120);
 
@@ -95,6 +97,19 @@ pub async fn poll<T>(mut f: impl AsyncFnMut() -> Result<Option<T>>, what: &str) 
         }
         tokio::time::sleep(Duration::from_millis(50)).await;
     }
+}
+
+/// Waits until the daemon's API sees robot `name` alive.
+pub async fn wait_robot_alive(server: &TestServer, name: &str) -> Result<()> {
+    let path = format!("/v1/robots/{name}");
+    poll(
+        async || {
+            let (code, r) = server.get(&path).await?;
+            Ok((code == 200 && r["alive"] == true).then_some(()))
+        },
+        &format!("robot {name} alive"),
+    )
+    .await
 }
 
 /// A JSON grid map (DESIGN §5.3) of `w × h` cells of `res` metres from the origin, free inside a one-cell wall

@@ -7,7 +7,7 @@ use shift_proto::PlanDocument;
 use shift_proto::ros::odometry::encode_odometry;
 use shift_proto::ros::path::decode_path;
 use shift_proto::ros::point_cloud2::encode_point_cloud2_xyz;
-use shift_tests::fleet::{LONG, free_port, header, obstacle_box, odom, poll, robot_session};
+use shift_tests::fleet::{LONG, free_port, header, obstacle_box, odom, poll, robot_session, wait_robot_alive};
 use shift_tests::{TestServer, demo_request, test_config};
 use zenoh::bytes::Encoding;
 use zenoh::qos::CongestionControl;
@@ -44,14 +44,7 @@ async fn robot_streams_gets_its_plan_and_is_lost_when_its_token_drops() -> Resul
         .map_err(|e| anyhow!("{e}"))?;
 
     // The robot is seen alive.
-    poll(
-        async || {
-            let (code, r) = server.get("/v1/robots/r1").await?;
-            Ok((code == 200 && r["alive"] == true).then_some(()))
-        },
-        "robot r1 alive",
-    )
-    .await?;
+    wait_robot_alive(&server, "r1").await?;
 
     // Odometry (CDR) and a cloud of an obstacle cluster in the map frame (a 3-D box 0.2-0.6 m high).
     robot

@@ -11,7 +11,7 @@ use anyhow::{Context, Result, anyhow};
 use serde_json::{Value, json};
 use shift_proto::ros::odometry::encode_odometry;
 use shift_proto::ros::point_cloud2::encode_point_cloud2_xyz;
-use shift_tests::fleet::{LONG, free_port, header, obstacle_box, odom, poll, robot_session};
+use shift_tests::fleet::{LONG, free_port, header, obstacle_box, odom, poll, robot_session, wait_robot_alive};
 use shift_tests::{TestServer, demo_request, test_config};
 use shiftd::replay::{Action, Recorded, into_engine, onto_zenoh};
 use zenoh::bytes::Encoding;
@@ -41,14 +41,7 @@ async fn recorded_session(record_dir: &Path, data_dir: &Path) -> Result<Vec<[f32
         .declare_subscriber("shift/default/robots/r1/plan")
         .await
         .map_err(zerr)?;
-    poll(
-        async || {
-            let (code, r) = server.get("/v1/robots/r1").await?;
-            Ok((code == 200 && r["alive"] == true).then_some(()))
-        },
-        "robot r1 alive",
-    )
-    .await?;
+    wait_robot_alive(&server, "r1").await?;
 
     robot
         .put("shift/default/robots/r1/odom", encode_odometry(&odom(0.5, 0.5, 1)))

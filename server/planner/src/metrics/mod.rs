@@ -41,32 +41,58 @@ pub struct PlanMetrics {
 /// Computes every metric of `path` (map frame, metres) on `space`.
 pub fn evaluate(space: &CoverageSpace, path: &[Point2]) -> PlanMetrics {
     let g = *space.geometry();
-    let w = space.robot.tool_width_m;
-    let mut raster = CoverageRaster::new(g, w / 2.0);
+    let mut raster = CoverageRaster::new(g, space.robot.tool_width_m / 2.0);
     raster.stamp_polyline(path);
-    let covered = raster.count();
-    let coverable_cells = space.coverable_count();
-    let covered_coverable_cells = (0..g.len())
-        .filter(|&i| space.coverable[i] && raster.is_covered(i))
-        .count();
     let length_m = crate::geom::polyline_length(path);
-    let covered_area = covered as f64 * g.resolution * g.resolution;
-    let overlap_pct = if covered_area > 0.0 {
-        (length_m * w - covered_area) / covered_area * 100.0
-    } else {
-        0.0
-    };
-    let coverage_pct = if coverable_cells > 0 {
-        covered_coverable_cells as f64 / coverable_cells as f64 * 100.0
-    } else {
-        100.0
-    };
+    let Coverage {
+        coverage_pct,
+        overlap_pct,
+        coverable_cells,
+        covered_coverable_cells,
+    } = coverage_of(space, &raster, length_m);
     PlanMetrics {
         coverage_pct,
         overlap_pct,
         length_m,
         turns: count_turns(path),
         collisions: count_collisions(space, path),
+        coverable_cells,
+        covered_coverable_cells,
+    }
+}
+
+/// DESIGN §6 coverage and overlap of a path of `length_m` whose covered cells are stamped on `raster`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Coverage {
+    /// |covered ∩ coverable| / |coverable|, percent (100 without coverable cells).
+    pub coverage_pct: f64,
+    /// (length × tool width − covered area) / covered area, percent (0 when nothing is covered).
+    pub overlap_pct: f64,
+    /// |coverable|.
+    pub coverable_cells: usize,
+    /// |covered ∩ coverable|.
+    pub covered_coverable_cells: usize,
+}
+
+/// See [`Coverage`]; `evaluate` and the planner's estimates share it.
+pub fn coverage_of(space: &CoverageSpace, raster: &CoverageRaster, length_m: f64) -> Coverage {
+    let g = space.geometry();
+    let coverable_cells = space.coverable_count();
+    let covered_coverable_cells = (0..g.len())
+        .filter(|&i| space.coverable[i] && raster.is_covered(i))
+        .count();
+    let covered_area = raster.count() as f64 * g.resolution * g.resolution;
+    Coverage {
+        coverage_pct: if coverable_cells > 0 {
+            covered_coverable_cells as f64 / coverable_cells as f64 * 100.0
+        } else {
+            100.0
+        },
+        overlap_pct: if covered_area > 0.0 {
+            (length_m * space.robot.tool_width_m - covered_area) / covered_area * 100.0
+        } else {
+            0.0
+        },
         coverable_cells,
         covered_coverable_cells,
     }

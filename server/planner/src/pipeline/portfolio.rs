@@ -6,7 +6,7 @@
 //! (DESIGN §6: for equal coverage, the shortest path); earlier members win ties.
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, mpsc};
 use std::time::Duration;
 
 use crate::decompose::DecompositionMethod;
@@ -22,7 +22,7 @@ use super::{AUTO_SPIRAL_MAX_CELLS, FRAMED_MAX_CELLS, PlanMonitor, PlanOutput, Pl
 /// Share of the progress bar the preparations take (the rest is linking the winner).
 const PREPARE_SHARE: f64 = 0.75;
 
-/// How often the calling thread polls its monitor for cancellation while workers prepare.
+/// How often, at least, the calling thread polls its monitor for cancellation while workers prepare.
 const POLL: Duration = Duration::from_millis(10);
 
 /// See the module docs. The strategies are prepared on [`PlanParams::threads`] worker threads while the
@@ -81,9 +81,10 @@ pub fn plan(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanMo
     assemble(space, best, monitor)
 }
 
-/// Runs `job(0..count)` on up to `threads` scoped threads while the calling thread polls `monitor`: it
-/// raises `cancel` when the monitor asks, and reports progress from `lo` to `hi` as jobs finish. Results
-/// come back in job order. A panicking job ends the wait (the scope then re-raises the panic).
+/// Runs `job(0..count)` on up to `threads` scoped threads while the calling thread waits on their
+/// reports: it raises `cancel` when `monitor` asks (polled at least every [`POLL`]), and reports progress
+/// from `lo` to `hi` as jobs finish. Results come back in job order. A panicking job ends the wait (its
+/// sender drops; the scope then re-raises the panic).
 fn run_parallel<T: Send>(
     threads: usize,
     count: usize,
@@ -92,53 +93,40 @@ fn run_parallel<T: Send>(
     (lo, hi): (f64, f64),
     job: impl Fn(usize) -> T + Sync,
 ) -> Vec<Option<T>> {
-    /// Counts a worker out when it ends, by return or by unwinding.
-    struct Leaving<'a>(&'a AtomicUsize);
-    impl Drop for Leaving<'_> {
-        fn drop(&mut self) {
-            self.0.fetch_sub(1, Ordering::Release);
-        }
-    }
-    let slots: Mutex<Vec<Option<T>>> = Mutex::new((0..count).map(|_| None).collect());
-    let finished = AtomicUsize::new(0);
+    let mut slots: Vec<Option<T>> = (0..count).map(|_| None).collect();
     let next = AtomicUsize::new(0);
-    let workers = threads.clamp(1, count.max(1));
-    let running = AtomicUsize::new(workers);
-    let work = || {
-        let _leaving = Leaving(&running);
-        loop {
-            let k = next.fetch_add(1, Ordering::Relaxed);
-            if k >= count {
-                break;
-            }
-            let out = job(k);
-            if let Ok(mut s) = slots.lock() {
-                s[k] = Some(out);
-            }
-            finished.fetch_add(1, Ordering::Release);
-        }
-    };
+    let (tx, rx) = mpsc::channel::<(usize, T)>();
     std::thread::scope(|scope| {
-        for _ in 0..workers {
-            scope.spawn(work);
+        for _ in 0..threads.clamp(1, count.max(1)) {
+            let tx = tx.clone();
+            let (next, job) = (&next, &job);
+            scope.spawn(move || {
+                loop {
+                    let k = next.fetch_add(1, Ordering::Relaxed);
+                    if k >= count || tx.send((k, job(k))).is_err() {
+                        break;
+                    }
+                }
+            });
         }
-        let mut reported = 0;
-        loop {
+        drop(tx);
+        let mut done = 0;
+        while done < count {
             if monitor.cancelled() {
                 cancel.store(true, Ordering::Relaxed);
             }
-            let done = finished.load(Ordering::Acquire);
-            if done > reported {
-                reported = done;
-                monitor.progress(lo + (hi - lo) * done as f64 / count.max(1) as f64);
+            match rx.recv_timeout(POLL) {
+                Ok((k, out)) => {
+                    slots[k] = Some(out);
+                    done += 1;
+                    monitor.progress(lo + (hi - lo) * done as f64 / count as f64);
+                }
+                Err(mpsc::RecvTimeoutError::Timeout) => {}
+                Err(mpsc::RecvTimeoutError::Disconnected) => break,
             }
-            if done >= count || running.load(Ordering::Acquire) == 0 {
-                break;
-            }
-            std::thread::sleep(POLL);
         }
     });
-    slots.into_inner().unwrap_or_default()
+    slots
 }
 
 /// The strategies `params` leaves open, in tie-breaking order.

@@ -9,7 +9,7 @@ use crate::error::{PlannerError, Result};
 use crate::geom::{Point2, polyline_length};
 use crate::link::{LinkParams, Linker, geodesic_matrix};
 use crate::map::DistanceField;
-use crate::metrics::CoverageRaster;
+use crate::metrics::{CoverageRaster, coverage_of};
 use crate::order::{DistanceMatrix, SolveBudget, Tour, TourOption, TourProblem};
 use crate::pattern::boundary::{candidates, select};
 use crate::pattern::frame::frame_tasks;
@@ -208,16 +208,8 @@ pub fn prepare(
         0..regions.count,
     );
     for (id, opts) in options.iter().enumerate() {
-        let Some(route) = opts.first() else { continue };
-        let mut prev: Option<Point2> = None;
-        for leg in &route.legs {
-            let pts = leg.points(&tasks[id]);
-            if let (Some(a), Some(&b)) = (prev, pts.first())
-                && space.segment_ok(a, b)
-            {
-                raster.stamp_segment(a, b);
-            }
-            prev = pts.last().copied();
+        if let Some(route) = opts.first() {
+            stamp_route(space, &mut raster, route, &tasks[id], false);
         }
     }
     check(monitor)?;
@@ -297,17 +289,7 @@ pub fn prepare(
     let mut driven = CoverageRaster::new(g, space.robot.tool_width_m / 2.0);
     for (&k, &o) in tour.order.iter().zip(&tour.options) {
         let id = active[k];
-        let mut prev: Option<Point2> = None;
-        for leg in &options[id][o].legs {
-            let pts = leg.points(&tasks[id]);
-            if let (Some(a), Some(&b)) = (prev, pts.first())
-                && space.segment_ok(a, b)
-            {
-                driven.stamp_segment(a, b);
-            }
-            driven.stamp_polyline(&pts);
-            prev = pts.last().copied();
-        }
+        stamp_route(space, &mut driven, &options[id][o], &tasks[id], true);
     }
     let estimate = estimate(space, &driven, tour.cost);
     Ok(Prepared {
@@ -324,24 +306,29 @@ pub fn prepare(
 }
 
 fn estimate(space: &CoverageSpace, raster: &CoverageRaster, length_m: f64) -> Estimate {
-    let g = space.geometry();
-    let coverable = space.coverable_count();
-    let covered_coverable = (0..g.len())
-        .filter(|&i| space.coverable[i] && raster.is_covered(i))
-        .count();
-    let covered_area = raster.count() as f64 * g.resolution * g.resolution;
+    let c = coverage_of(space, raster, length_m);
     Estimate {
-        coverage_pct: if coverable > 0 {
-            covered_coverable as f64 / coverable as f64 * 100.0
-        } else {
-            100.0
-        },
+        coverage_pct: c.coverage_pct,
         length_m,
-        overlap_pct: if covered_area > 0.0 {
-            (length_m * space.robot.tool_width_m - covered_area) / covered_area * 100.0
-        } else {
-            0.0
-        },
+        overlap_pct: c.overlap_pct,
+    }
+}
+
+/// Stamps the straight steps between the legs of `route` on `raster` (steps that need a link are left to
+/// the assembly), and with `legs` the legs too.
+fn stamp_route(space: &CoverageSpace, raster: &mut CoverageRaster, route: &RegionRoute, tasks: &[Task], legs: bool) {
+    let mut prev: Option<Point2> = None;
+    for leg in &route.legs {
+        let pts = leg.points(tasks);
+        if let (Some(a), Some(&b)) = (prev, pts.first())
+            && space.segment_ok(a, b)
+        {
+            raster.stamp_segment(a, b);
+        }
+        if legs {
+            raster.stamp_polyline(&pts);
+        }
+        prev = pts.last().copied();
     }
 }
 
