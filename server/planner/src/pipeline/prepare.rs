@@ -18,7 +18,7 @@ use crate::pattern::spiral::plan_rings;
 use crate::pattern::{PatternMethod, Task};
 use crate::space::CoverageSpace;
 
-use super::route::{RegionRoute, RouteSearch, euclidean, region_options, through_obstacle};
+use super::route::{RegionRoute, RouteSearch, region_options, through_obstacle};
 use super::{PlanMonitor, PlanParams};
 
 /// A plan decided up to its visiting order; [`super::assemble::assemble`] links it into a path.
@@ -367,7 +367,6 @@ fn route_regions(
             Vec::new()
         } else {
             let search = RouteSearch {
-                connect: &euclidean,
                 seed,
                 iterations: (tasks[id].len() as u64).pow(2).clamp(1_000, 200_000),
                 stop: Some(&stop_flag),

@@ -127,26 +127,24 @@ fn task_options(tasks: &[Task], k: usize) -> Vec<(Point2, Point2, Leg)> {
     }
 }
 
-/// How a region's tasks are ordered: the cost of a connection between two points, and the local search's
-/// seed and bounds.
+/// How a region's tasks are ordered: the local search's seed and bounds, and how the routes found are
+/// costed. The search plans on straight-line connections.
 #[derive(Clone, Copy)]
 pub struct RouteSearch<'a> {
-    /// Estimated cost of driving from one point to another between tasks (e.g. [`euclidean`]).
-    pub connect: &'a dyn Fn(Point2, Point2) -> f64,
     /// Seed of the local search.
     pub seed: u64,
     /// Work bound of the local search (moves).
     pub iterations: u64,
     /// Polled by the local search; true stops it with the best tour so far.
     pub stop: Option<&'a dyn Fn() -> bool>,
-    /// The driven length of a connection that `connect` may underestimate (`None` when `connect` is right;
+    /// The driven length of a connection that its straight length underestimates (`None` when it does not;
     /// infinity when no link exists); used to cost the routes found (see [`region_options`]). `None`:
-    /// `connect` only.
+    /// straight lengths only.
     pub exact: Option<&'a dyn Fn(Point2, Point2) -> Option<f64>>,
 }
 
 /// Straight-line connection cost (no obstacles).
-pub fn euclidean(a: Point2, b: Point2) -> f64 {
+fn euclidean(a: Point2, b: Point2) -> f64 {
     (b - a).norm()
 }
 
@@ -166,7 +164,7 @@ pub fn through_obstacle(space: &CoverageSpace, a: Point2, b: Point2) -> bool {
 /// sweep order (lanes by offset, nearest end first, other tasks inserted where they cost least) — local search
 /// from a nearest-neighbour start can miss the zigzag that is optimal for a monotone region.
 pub fn route_from(tasks: &[Task], angle: f64, entry: Point2, search: &RouteSearch<'_>) -> RegionRoute {
-    let mut problem = SearchProblem::new(tasks, search.connect);
+    let mut problem = SearchProblem::new(tasks);
     route_with(tasks, angle, entry, search, problem.as_mut())
 }
 
@@ -179,7 +177,7 @@ fn route_with(
     search: &RouteSearch<'_>,
     problem: Option<&mut SearchProblem>,
 ) -> RegionRoute {
-    let swept = route_sweep(tasks, angle, entry, search.connect);
+    let swept = route_sweep(tasks, angle, entry);
     let Some(problem) = problem else {
         return swept;
     };
@@ -209,7 +207,8 @@ fn legs_cost(tasks: &[Task], entry: Point2, legs: &[Leg], connect: &dyn Fn(Point
 
 /// The sweep order: lanes sorted by their offset across the sweep direction (then along it), each driven from
 /// its end nearest to the current position; every other task is inserted where it adds the least.
-fn route_sweep(tasks: &[Task], angle: f64, entry: Point2, connect: &dyn Fn(Point2, Point2) -> f64) -> RegionRoute {
+fn route_sweep(tasks: &[Task], angle: f64, entry: Point2) -> RegionRoute {
+    let connect = euclidean;
     let d = direction(angle);
     let n = Vector2::new(-d.y, d.x);
     let mut lanes: Vec<usize> = (0..tasks.len())
@@ -275,7 +274,7 @@ fn route_sweep(tasks: &[Task], angle: f64, entry: Point2, connect: &dyn Fn(Point
             legs.insert(pos, leg);
         }
     }
-    let cost = legs_cost(tasks, entry, &legs, connect);
+    let cost = legs_cost(tasks, entry, &legs, &connect);
     let exit = legs.last().map_or(entry, |l| *l.points(tasks).last().unwrap_or(&entry));
     RegionRoute {
         legs,
@@ -295,7 +294,7 @@ struct SearchProblem {
 
 impl SearchProblem {
     /// The problem of `tasks`, or `None` when their options have more than [`MAX_SEARCH_POINTS`] points.
-    fn new(tasks: &[Task], connect: &dyn Fn(Point2, Point2) -> f64) -> Option<Self> {
+    fn new(tasks: &[Task]) -> Option<Self> {
         let count: usize = (0..tasks.len()).map(|k| 2 * task_options(tasks, k).len()).sum();
         if count > MAX_SEARCH_POINTS {
             return None;
@@ -327,7 +326,7 @@ impl SearchProblem {
             nodes.push(node);
             legs_of.push(legs);
         }
-        let dist = DistanceMatrix::from_fn(points.len(), |i, j| connect(points[i], points[j]));
+        let dist = DistanceMatrix::from_fn(points.len(), |i, j| euclidean(points[i], points[j]));
         Some(Self {
             problem: TourProblem {
                 dist,
@@ -344,7 +343,7 @@ impl SearchProblem {
     fn route(&mut self, tasks: &[Task], entry: Point2, search: &RouteSearch<'_>) -> RegionRoute {
         self.points[0] = entry;
         for j in 1..self.points.len() {
-            self.problem.dist.set(0, j, (search.connect)(entry, self.points[j]));
+            self.problem.dist.set(0, j, euclidean(entry, self.points[j]));
         }
         let tour = OrderMethod::TwoOpt.orderer().solve(
             &self.problem,
@@ -392,12 +391,12 @@ pub fn corner_entries(tasks: &[Task], angle: f64) -> Vec<Point2> {
 }
 
 /// All routes of a region worth offering to the visiting-order problem: one per corner entry, and each
-/// driven backwards. The search plans with [`RouteSearch::connect`]; with [`RouteSearch::exact`], each
+/// driven backwards. The search plans on straight-line connections; with [`RouteSearch::exact`], each
 /// route's cost is then recomputed with the driven length of every connection it uses that cannot be
 /// taken straight, so that the visiting order (and the choice among strategies) sees what the robot will
 /// drive — a step through a wall costs the way round, not the wall's thickness.
 pub fn region_options(tasks: &[Task], angle: f64, search: &RouteSearch<'_>) -> Vec<RegionRoute> {
-    let mut problem = SearchProblem::new(tasks, search.connect);
+    let mut problem = SearchProblem::new(tasks);
     let mut routes: Vec<RegionRoute> = corner_entries(tasks, angle)
         .into_iter()
         .map(|e| route_with(tasks, angle, e, search, problem.as_mut()))
@@ -410,7 +409,7 @@ pub fn region_options(tasks: &[Task], angle: f64, search: &RouteSearch<'_>) -> V
             if let Some(&d) = known.borrow().get(&key) {
                 return d;
             }
-            let d = exact(a, b).unwrap_or_else(|| (search.connect)(a, b));
+            let d = exact(a, b).unwrap_or_else(|| euclidean(a, b));
             known.borrow_mut().insert(key, d);
             d
         };
@@ -443,7 +442,6 @@ mod tests {
     fn lanes_are_driven_as_a_zigzag() {
         let tasks: Vec<Task> = (0..6).map(|k| lane(k as f64 * 0.3)).collect();
         let search = RouteSearch {
-            connect: &euclidean,
             seed: 1,
             iterations: 10_000,
             stop: None,
