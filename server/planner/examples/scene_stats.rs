@@ -83,6 +83,7 @@ fn main() {
             dump_png(
                 &space,
                 &out.points(),
+                &out.waypoints.iter().map(|w| w.region).collect::<Vec<_>>(),
                 &out.labels,
                 &format!(
                     "{dump}/{}.png",
@@ -90,6 +91,69 @@ fn main() {
                         .file_name()
                         .map_or("x".into(), |n| n.to_string_lossy().into_owned())
                 ),
+            );
+        }
+        if std::env::var("LONG").is_ok() {
+            let w = &out.waypoints;
+            let mut hist = [0.0f64; 6];
+            for s in w.windows(2) {
+                if s[1].kind != shift_planner::pipeline::WaypointKind::Cover {
+                    continue;
+                }
+                let d = s[1].position - s[0].position;
+                let len = d.norm();
+                let horiz = d.y.abs() < 1e-6 * len.max(1e-9) || d.x.abs() < 1e-6 * len.max(1e-9);
+                if horiz {
+                    continue;
+                }
+                let b = if len < 0.2 {
+                    0
+                } else if len < 0.4 {
+                    1
+                } else if len < 0.8 {
+                    2
+                } else if len < 1.6 {
+                    3
+                } else if len < 3.2 {
+                    4
+                } else {
+                    5
+                };
+                hist[b] += len;
+                if len > 1.6 {
+                    println!(
+                        "  long {:.2} m {:?} -> {:?} r{:?}",
+                        len, s[0].position, s[1].position, s[1].region
+                    );
+                }
+            }
+            let mut per: std::collections::BTreeMap<u32, (f64, f64, usize)> = Default::default();
+            for s in w.windows(2) {
+                if s[1].kind != shift_planner::pipeline::WaypointKind::Cover {
+                    continue;
+                }
+                let Some(r) = s[1].region else { continue };
+                let ang = out.regions.iter().find(|x| x.id == r).map_or(0.0, |x| x.angle_rad);
+                let d = s[1].position - s[0].position;
+                let len = d.norm();
+                let along = (d.x * ang.cos() + d.y * ang.sin()).abs();
+                let e = per.entry(r).or_default();
+                e.0 += len;
+                if along > 0.999 * len && len > 0.7 {
+                    e.1 += len;
+                    e.2 += 1;
+                }
+            }
+            for (r, (c, l, n)) in &per {
+                let area = out.regions.iter().find(|x| x.id == *r).map_or(0.0, |x| x.area_m2);
+                println!(
+                    "  region {r:3} area {area:6.1} cover {c:7.1} lanes {l:7.1} ({n:3}) other {:6.1}",
+                    c - l
+                );
+            }
+            println!(
+                "  non-axis cover segments by length <0.2 <0.4 <0.8 <1.6 <3.2 >3.2: {:?}",
+                hist.map(|h| (h * 10.0).round() / 10.0)
             );
         }
         let m = out.metrics;
@@ -117,7 +181,7 @@ fn main() {
 }
 
 /// Grey: not free; white: free; green tint: covered; red: coverable but uncovered; blue: path vertices.
-fn dump_png(space: &CoverageSpace, path: &[Point2], labels: &[u32], file: &str) {
+fn dump_png(space: &CoverageSpace, path: &[Point2], regions: &[Option<u32>], labels: &[u32], file: &str) {
     let g = *space.geometry();
     let mut raster = shift_planner::metrics::CoverageRaster::new(g, space.robot.tool_width_m / 2.0);
     raster.stamp_polyline(path);
@@ -143,12 +207,24 @@ fn dump_png(space: &CoverageSpace, path: &[Point2], labels: &[u32], file: &str) 
         };
         img.put_pixel(c.x as u32, (g.height - 1 - c.y) as u32, image::Rgb(px));
     }
-    for w in path.windows(2) {
+    let only: Option<u32> = std::env::var("REGION").ok().and_then(|r| r.parse().ok());
+    let segs: Vec<usize> = (1..path.len())
+        .filter(|&k| only.is_none() || regions.get(k).copied().flatten() == only)
+        .collect();
+    for (j, &k) in segs.iter().enumerate() {
+        let w = [path[k - 1], path[k]];
+        // With REGION, the colour runs from red (first) to blue (last) along the route.
+        let t = j as f64 / segs.len().max(1) as f64;
+        let colour = if only.is_some() {
+            [(230.0 * (1.0 - t)) as u8, 0, (230.0 * t) as u8]
+        } else {
+            [0, 0, 200]
+        };
         let n = ((w[1] - w[0]).norm() / (g.resolution * 0.5)).ceil().max(1.0) as usize;
         for k in 0..=n {
             let p = w[0] + (w[1] - w[0]) * (k as f64 / n as f64);
             if let Some(c) = g.locate(p) {
-                img.put_pixel(c.x as u32, (g.height - 1 - c.y) as u32, image::Rgb([0, 0, 200]));
+                img.put_pixel(c.x as u32, (g.height - 1 - c.y) as u32, image::Rgb(colour));
             }
         }
     }

@@ -6,7 +6,8 @@
 //! at an angle to them, and the rims of round obstacles. [`candidates`] proposes:
 //! 1. stretches of the region's contour whose cells are within half a tool width of an uncovered target,
 //!    extended a little at both ends, merged across short gaps and cut into pieces of bounded length;
-//! 2. single visits (at the nearest reachable cell) for uncovered targets no stretch reaches.
+//! 2. for uncovered targets no stretch reaches: an excursion from a lane, ring or frame segment nearby
+//!    (see [`super::excursion`]), else a single visit at the target's nearest reachable cell.
 //!
 //! [`select`] then picks candidates greedily by new coverage per metre of extra driving: every candidate at
 //! least `min_yield` as productive as a lane is taken, and beyond that the most productive ones until the
@@ -14,6 +15,7 @@
 //! the last fractions of a percent only as far as the target asks.
 
 use super::contour::trace_cells;
+use super::excursion::{Excursion, Hosts};
 use super::lanes::RegionView;
 use super::{Task, TaskKind};
 use crate::geom::{Point2, simplify_polyline};
@@ -27,8 +29,21 @@ use crate::space::CoverageSpace;
 pub struct Candidate {
     /// Region id.
     pub region: u32,
-    /// The pass.
+    /// The pass (for an excursion: the segment from where it leaves its host to where it turns back).
     pub task: Task,
+    /// Set when the pass is an out-and-back from a task of the main pattern (see [`super::excursion`]).
+    pub excursion: Option<Excursion>,
+}
+
+impl Candidate {
+    /// Driving the candidate adds: its length twice (there and back along the wall, in the worst case)
+    /// plus a tool width to turn off and on the lane set; an excursion is driven from its host, out and back.
+    fn cost(&self, w: f64, res: f64) -> f64 {
+        match &self.excursion {
+            Some(e) => e.length() + res,
+            None => 2.0 * self.task.length() + w,
+        }
+    }
 }
 
 /// Targeted-pass knobs.
@@ -52,12 +67,13 @@ impl Default for PassParams {
     }
 }
 
-/// Candidate passes and visits for one region's still-uncovered targets (nothing is stamped).
-/// `nearest_reachable` is the distance field whose sites are the reachable cells.
+/// Candidate passes, excursions from `hosts` (the region's main-pattern tasks) and visits for one region's
+/// still-uncovered targets (nothing is stamped). `nearest_reachable` is the distance field whose sites are
+/// the reachable cells.
 pub fn candidates(
     space: &CoverageSpace,
     region: RegionView<'_>,
-    raster: &CoverageRaster,
+    (raster, hosts): (&CoverageRaster, &Hosts),
     nearest_reachable: &DistanceField,
     params: &PassParams,
 ) -> Vec<Candidate> {
@@ -126,13 +142,34 @@ pub fn candidates(
                             points: simple,
                             kind: TaskKind::Boundary,
                         },
+                        excursion: None,
                     });
                 }
             }
         }
     }
+    // The targets no stretch reaches: an excursion where a host is near (one per cell it would turn back
+    // in), else a visit. (Excursions for every uncovered target were tried: greedy selection then prefers
+    // many small excursions along a wall band to one stretch along it, and the plans get longer.)
+    let mut ends = std::collections::HashSet::new();
     for &t in region.targets {
         if !need(t) || reached.contains(&t) {
+            continue;
+        }
+        if let Some(e) = hosts.excursion_to(space, g.center_of(t)) {
+            if g.locate(e.end).is_some_and(|c| ends.insert(g.index(c))) {
+                out.push(Candidate {
+                    region: region.id,
+                    task: Task {
+                        points: vec![e.at, e.end],
+                        kind: TaskKind::Boundary,
+                    },
+                    excursion: Some(e),
+                });
+            }
+            continue;
+        }
+        if reached.contains(&t) {
             continue;
         }
         let Some(r) = nearest_reachable.nearest_site_index(t) else {
@@ -145,6 +182,7 @@ pub fn candidates(
                 points: vec![p],
                 kind: TaskKind::Visit,
             },
+            excursion: None,
         });
     }
     out
@@ -164,8 +202,7 @@ pub fn select(
     let mut covered = (0..g.len())
         .filter(|&i| space.coverable[i] && raster.is_covered(i))
         .count();
-    // A lane covers w / res² new cells per metre; a candidate's cost is its length driven twice (there and
-    // back along the wall, in the worst case) plus a tool width to turn off and on the lane set.
+    // A lane covers w / res² new cells per metre; see [`Candidate::cost`].
     let lane_yield = w / (res * res);
     // Cells a candidate would newly cover, counted once even where its segments' capsules overlap: a
     // per-cell stamp (one allocation for the whole selection) instead of a set per evaluation.
@@ -190,20 +227,19 @@ pub fn select(
         }
         count
     };
-    let cost = |t: &Task| 2.0 * t.length() + w;
     let mut chosen = Vec::new();
     // Lazy greedy: yields only fall as coverage grows, so a stale upper bound that still tops the heap after
     // a refresh is the true best.
     let mut yields: Vec<f64> = pool
         .iter()
-        .map(|c| gain(raster, &c.task) as f64 / cost(&c.task))
+        .map(|c| gain(raster, &c.task) as f64 / c.cost(w, res))
         .collect();
     while let Some(best) = (0..pool.len())
         .filter(|&k| yields[k] > 0.0)
         .max_by(|&a, &b| yields[a].total_cmp(&yields[b]))
     {
         let cells = gain(raster, &pool[best].task);
-        let fresh = cells as f64 / cost(&pool[best].task);
+        let fresh = cells as f64 / pool[best].cost(w, res);
         if fresh + 1e-12 < yields[best] {
             yields[best] = fresh;
             continue;

@@ -2,12 +2,14 @@
 //!
 //! A pattern turns one region into [`Task`]s — polylines the robot must drive, in either direction: the
 //! boustrophedon lanes ([`lanes`]), the rings of a spiral ([`spiral`]), and the targeted passes that cover
-//! what those miss ([`boundary`]: stretches of the wall contour, and single visits into pockets), and the
+//! what those miss ([`boundary`]: stretches of the wall contour, excursions from the pattern into pockets
+//! next to it ([`excursion`]), and single visits into the other pockets), and the
 //! frame along a region's walls that inset lanes leave to it ([`frame`]). Ordering
 //! the tasks and linking them is the job of `order` and `link`.
 
 pub mod boundary;
 pub mod contour;
+pub mod excursion;
 pub mod frame;
 pub mod lanes;
 pub mod spiral;

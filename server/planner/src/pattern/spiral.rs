@@ -85,7 +85,7 @@ pub fn plan_rings(space: &CoverageSpace, region: RegionView<'_>) -> Vec<Task> {
                 if !piece.is_empty() {
                     let simple = simplify_polyline(piece, 0.5 * res, &|a, b| space.segment_ok(a, b));
                     tasks.push(Task {
-                        points: simple,
+                        points: densify(&simple, w),
                         kind: TaskKind::Ring,
                     });
                     piece.clear();
@@ -103,4 +103,17 @@ pub fn plan_rings(space: &CoverageSpace, region: RegionView<'_>) -> Vec<Task> {
         }
     }
     tasks
+}
+
+/// `points` with vertices added so that no segment is longer than `max_m` (same course): a route may enter
+/// and leave a ring at any vertex, so the vertex nearest a neighbouring ring is never far from the nearest
+/// point.
+fn densify(points: &[Point2], max_m: f64) -> Vec<Point2> {
+    let mut out = Vec::with_capacity(points.len());
+    for s in points.windows(2) {
+        let n = ((s[1] - s[0]).norm() / max_m).ceil().max(1.0) as usize;
+        out.extend((0..n).map(|k| s[0] + (s[1] - s[0]) * (k as f64 / n as f64)));
+    }
+    out.extend(points.last());
+    out
 }

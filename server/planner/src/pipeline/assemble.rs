@@ -24,6 +24,7 @@ pub fn assemble(space: &CoverageSpace, prepared: Prepared, monitor: &mut dyn Pla
         active,
         tour,
         mut warnings,
+        excursions_m,
         ..
     } = prepared;
     let mut path = Path::new(space.start);
@@ -67,7 +68,7 @@ pub fn assemble(space: &CoverageSpace, prepared: Prepared, monitor: &mut dyn Pla
     let waypoints = path.waypoints;
     let pts: Vec<Point2> = waypoints.iter().map(|w| w.position).collect();
     let metrics = evaluate(space, &pts);
-    let stats = PlanStats::of(&waypoints, &tasks);
+    let stats = PlanStats::of(&waypoints, &tasks, excursions_m);
     monitor.progress(1.0);
     Ok(PlanOutput {
         waypoints,

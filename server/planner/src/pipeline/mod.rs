@@ -138,7 +138,8 @@ pub struct PlanStats {
 }
 
 impl PlanStats {
-    fn of(waypoints: &[Waypoint], tasks: &[Vec<Task>]) -> Self {
+    /// `excursions_m`: what excursions to visits add to the main pattern's tasks (counted as passes).
+    fn of(waypoints: &[Waypoint], tasks: &[Vec<Task>], excursions_m: f64) -> Self {
         use crate::pattern::TaskKind;
         let (mut cover, mut transit) = (0.0, 0.0);
         for w in waypoints.windows(2) {
@@ -157,8 +158,8 @@ impl PlanStats {
                 .map(Task::length)
                 .sum()
         };
-        let pattern_m = sum(&[TaskKind::Lane, TaskKind::Ring, TaskKind::Frame]);
-        let passes_m = sum(&[TaskKind::Boundary]);
+        let pattern_m = sum(&[TaskKind::Lane, TaskKind::Ring, TaskKind::Frame]) - excursions_m;
+        let passes_m = sum(&[TaskKind::Boundary]) + excursions_m;
         let visits = tasks.iter().flatten().filter(|t| t.kind == TaskKind::Visit).count();
         Self {
             pattern_m,

@@ -12,6 +12,7 @@ use crate::map::DistanceField;
 use crate::metrics::{CoverageRaster, coverage_of};
 use crate::order::{DistanceMatrix, SolveBudget, Tour, TourOption, TourProblem};
 use crate::pattern::boundary::{candidates, select};
+use crate::pattern::excursion::{Hosts, MAX_REACH_WIDTHS, splice};
 use crate::pattern::frame::frame_tasks;
 use crate::pattern::lanes::{LaneParams, Placement, RegionView, best_angle, plan_lanes};
 use crate::pattern::spiral::plan_rings;
@@ -40,6 +41,8 @@ pub struct Prepared {
     pub tour: Tour,
     /// Remarks so far.
     pub warnings: Vec<String>,
+    /// Length that excursions to visits add to the main pattern's tasks, metres (targeted driving).
+    pub excursions_m: f64,
     /// What this plan is expected to give, before linking.
     pub estimate: Estimate,
 }
@@ -214,16 +217,33 @@ pub fn prepare(
     }
     check(monitor)?;
     monitor.progress(0.45);
+    let mut excursions_m = 0.0;
     if params.targeted_passes {
         let mut pool = Vec::new();
-        for id in 0..regions.count {
-            pool.extend(candidates(space, view(id), &raster, nearest_reachable, &params.passes));
+        let reach_m = MAX_REACH_WIDTHS * space.robot.tool_width_m;
+        for (id, region_tasks) in tasks.iter().enumerate() {
+            let hosts = Hosts::new(region_tasks, reach_m);
+            pool.extend(candidates(
+                space,
+                view(id),
+                (&raster, &hosts),
+                nearest_reachable,
+                &params.passes,
+            ));
         }
         let chosen = select(space, pool, &mut raster, &params.passes);
         let mut touched = vec![false; regions.count];
+        let mut excursions = vec![Vec::new(); regions.count];
         for c in chosen {
-            touched[c.region as usize] = true;
-            tasks[c.region as usize].push(c.task);
+            let id = c.region as usize;
+            touched[id] = true;
+            match c.excursion {
+                Some(e) => excursions[id].push(e),
+                None => tasks[id].push(c.task),
+            }
+        }
+        for (id, list) in excursions.into_iter().enumerate() {
+            excursions_m += splice(space, &mut tasks[id], list);
         }
         let redo: Vec<usize> = (0..regions.count).filter(|&id| touched[id]).collect();
         route_regions(
@@ -301,6 +321,7 @@ pub fn prepare(
         active,
         tour,
         warnings: space.warnings.clone(),
+        excursions_m,
         estimate,
     })
 }

@@ -177,15 +177,50 @@ fn route_with(
     search: &RouteSearch<'_>,
     problem: Option<&mut SearchProblem>,
 ) -> RegionRoute {
-    let swept = route_sweep(tasks, angle, entry);
+    let swept = reanchor_loops(tasks, route_sweep(tasks, angle, entry));
     let Some(problem) = problem else {
         return swept;
     };
-    let searched = problem.route(tasks, entry, search);
+    let searched = reanchor_loops(tasks, problem.route(tasks, entry, search));
     if swept.cost + 1e-9 < searched.cost {
         swept
     } else {
         searched
+    }
+}
+
+/// Re-anchors every closed loop of `route` at its vertex nearest to where the route arrives (the search
+/// offers each loop only a few start vertices; a loop ends where it starts, so the nearest vertex also
+/// shortens the way on to the next leg). Keeps whichever of the two routes is shorter.
+fn reanchor_loops(tasks: &[Task], route: RegionRoute) -> RegionRoute {
+    let mut legs = route.legs.clone();
+    let mut at = route.entry;
+    let mut changed = false;
+    for leg in &mut legs {
+        let t = &tasks[leg.task];
+        if t.is_closed() {
+            let body = &t.points[..t.points.len() - 1];
+            let nearest = (0..body.len())
+                .min_by(|&a, &b| (body[a] - at).norm().total_cmp(&(body[b] - at).norm()))
+                .unwrap_or(leg.start_vertex);
+            changed |= nearest != leg.start_vertex;
+            leg.start_vertex = nearest;
+        }
+        at = *leg.points(tasks).last().unwrap_or(&at);
+    }
+    if !changed {
+        return route;
+    }
+    let cost = legs_cost(tasks, route.entry, &legs, &euclidean);
+    if cost + 1e-9 < route.cost {
+        RegionRoute {
+            legs,
+            exit: at,
+            cost,
+            ..route
+        }
+    } else {
+        route
     }
 }
 
@@ -457,6 +492,53 @@ mod tests {
         let back = r.reversed();
         assert_eq!(back.entry, r.exit);
         assert_eq!(back.legs[0].points(&tasks)[0], r.exit);
+    }
+
+    /// A closed square from `lo` to `hi` with `per_side` vertices on every side, starting at the corner `lo`.
+    fn square(lo: f64, hi: f64, per_side: usize) -> Task {
+        let corners = [(lo, lo), (hi, lo), (hi, hi), (lo, hi), (lo, lo)];
+        let mut points = Vec::new();
+        for c in corners.windows(2) {
+            for k in 0..per_side {
+                let t = k as f64 / per_side as f64;
+                points.push(Point2::new(
+                    c[0].0 + (c[1].0 - c[0].0) * t,
+                    c[0].1 + (c[1].1 - c[0].1) * t,
+                ));
+            }
+        }
+        points.push(points[0]);
+        Task {
+            points,
+            kind: TaskKind::Ring,
+        }
+    }
+
+    #[test]
+    fn nested_rings_are_entered_next_to_where_the_route_arrives() {
+        // Rings 0.3 m apart; each may start at any of its vertices, not only at its corners.
+        let tasks = vec![square(0.0, 4.0, 8), square(0.3, 3.7, 8)];
+        let search = RouteSearch {
+            seed: 1,
+            iterations: 10_000,
+            stop: None,
+            exact: None,
+        };
+        let r = route_from(&tasks, 0.0, Point2::new(2.0, 0.0), &search);
+        assert_eq!(r.legs.len(), 2);
+        // 16 m + 13.6 m of rings; every step runs 0.3 m straight across from where the route arrives (at
+        // the corners only, the steps would be 1.7 m and 0.42 m: 31.7 m in all).
+        let mut at = r.entry;
+        let mut steps = 0.0;
+        for leg in &r.legs {
+            let pts = leg.points(&tasks);
+            let step = (pts[0] - at).norm();
+            assert!(step < 0.3 + 1e-9, "step {step} from {at:?}");
+            steps += step;
+            at = *pts.last().expect("points");
+        }
+        assert!((r.cost - (16.0 + 13.6 + steps)).abs() < 1e-9, "cost {}", r.cost);
+        assert!(r.cost < 30.2 + 1e-9, "cost {}", r.cost);
     }
 
     #[test]
