@@ -49,6 +49,11 @@ pub fn assemble(space: &CoverageSpace, prepared: Prepared, monitor: &mut dyn Pla
         let first = path.waypoints.len() - 1;
         for leg in &route.legs {
             let pts = leg.points(&tasks[id]);
+            if let Some(step) = basis.wall_steps.along(space, path.last(), pts[0]) {
+                for &p in &step[1..] {
+                    path.push(p, WaypointKind::Cover, Some(id as u32));
+                }
+            }
             if path.cover_to(space, pts[0], id as u32, &mut step_linker, &mut warnings) {
                 for &p in &pts[1..] {
                     path.push(p, WaypointKind::Cover, Some(id as u32));

@@ -5,6 +5,7 @@ mod assemble;
 mod portfolio;
 pub mod prepare;
 pub mod route;
+pub mod wall_steps;
 
 use crate::decompose::{DecomposeParams, DecompositionMethod};
 use crate::error::Result;
