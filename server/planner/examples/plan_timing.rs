@@ -1,7 +1,7 @@
 //! Times each stage of a default plan on generated cluttered sites of growing size:
 //! `cargo run --release -p shift-planner --example plan_timing -- [SIDE_M ...]`; `first_region_ms` is when
 //! the first region of the final plan was ready (streamed to clients while the rest link). `STAGES=1`
-//! prints the progress timeline; `DECOMP` and `PLACE` fix the strategy.
+//! prints the progress timeline; `DECOMP`, `PATTERN` and `PLACE` fix the strategy.
 
 use std::time::Instant;
 
@@ -58,6 +58,9 @@ fn params() -> PlanParams {
     let mut p = PlanParams::default();
     if let Some(d) = std::env::var("DECOMP").ok().and_then(|d| d.parse().ok()) {
         p.decomposition = d;
+    }
+    if let Some(pt) = std::env::var("PATTERN").ok().and_then(|d| d.parse().ok()) {
+        p.pattern = pt;
     }
     if let Ok(pl) = std::env::var("PLACE") {
         use shift_planner::pattern::lanes::Placement;

@@ -76,9 +76,9 @@ pub trait Decomposer {
 /// The decompositions the planner offers.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
 pub enum DecompositionMethod {
-    /// The default: plan with boustrophedon cells and with wall division (in the requested pattern), and — up
-    /// to `pipeline::AUTO_SPIRAL_MAX_CELLS` reachable cells — with one spiral over the undivided space, and
-    /// keep the plan with the least overlap (DESIGN §6: swept area per covered area) that meets the coverage
+    /// The default: plan with boustrophedon cells and with wall division (in the requested pattern; on sites
+    /// above `pipeline::LARGE_SITE_CELLS` reachable cells wall division only) and with one spiral over the
+    /// undivided space, and keep the plan with the least overlap (DESIGN §6: swept area per covered area) that meets the coverage
     /// bar. No single strategy wins on every kind of map: rooms favour the contour-following spiral, racks and
     /// aisles the cells, open ground with round obstacles the wall division.
     #[default]

@@ -17,7 +17,7 @@ use crate::space::CoverageSpace;
 
 use super::assemble::assemble;
 use super::prepare::{Basis, Estimate, Prepared, nearest_reachable, prepare};
-use super::{AUTO_SPIRAL_MAX_CELLS, FRAMED_MAX_CELLS, PlanMonitor, PlanOutput, PlanParams};
+use super::{LARGE_SITE_CELLS, PlanMonitor, PlanOutput, PlanParams};
 
 /// Share of the progress bar the preparations take (the rest is linking the winner).
 const PREPARE_SHARE: f64 = 0.75;
@@ -131,26 +131,26 @@ fn run_parallel<T: Send>(
 
 /// The strategies `params` leaves open, in tie-breaking order.
 pub fn members(space: &CoverageSpace, params: &PlanParams) -> Vec<PlanParams> {
-    let reachable = space.reachable_count();
+    let large = space.reachable_count() > LARGE_SITE_CELLS;
     let mut strategies: Vec<(DecompositionMethod, PatternMethod)> = if params.decomposition == DecompositionMethod::Auto
     {
-        let mut s = vec![
-            (DecompositionMethod::Bcd, params.pattern),
-            (DecompositionMethod::Walls, params.pattern),
-        ];
-        // The undivided spiral's routing and pass selection grow faster than linearly with the area (one
-        // region holding every ring); on large sites it costs minutes, so it only joins below this size.
-        if reachable <= AUTO_SPIRAL_MAX_CELLS {
-            s.push((DecompositionMethod::Single, PatternMethod::Spiral));
-        }
+        let mut s = if large {
+            vec![(DecompositionMethod::Walls, params.pattern)]
+        } else {
+            vec![
+                (DecompositionMethod::Bcd, params.pattern),
+                (DecompositionMethod::Walls, params.pattern),
+            ]
+        };
+        s.push((DecompositionMethod::Single, PatternMethod::Spiral));
         s
     } else {
         vec![(params.decomposition, params.pattern)]
     };
-    let placements: &[Placement] = if reachable <= FRAMED_MAX_CELLS {
-        &[Placement::Lattice, Placement::Fit, Placement::Framed]
+    let placements: &[Placement] = if large {
+        &[Placement::Fit]
     } else {
-        &[Placement::Lattice, Placement::Fit]
+        &[Placement::Lattice, Placement::Fit, Placement::Framed]
     };
     let mut out = Vec::new();
     for (decomposition, pattern) in strategies.drain(..) {
@@ -227,6 +227,32 @@ mod tests {
             ..PlanParams::default()
         };
         assert_eq!(members(&space, &fixed), vec![fixed]);
+    }
+
+    #[test]
+    fn large_sites_prepare_walls_with_fitted_lanes_and_the_spiral() {
+        use crate::geom::Point2;
+        use crate::map::{CellState, GridGeometry, OccupancyGrid};
+        use crate::space::RobotShape;
+        let g = GridGeometry::new(1100, 1000, 0.1, Point2::origin()).expect("valid");
+        let robot = RobotShape {
+            radius_m: 0.3,
+            tool_width_m: 0.6,
+        };
+        let space =
+            CoverageSpace::new(OccupancyGrid::filled(g, CellState::Free), robot, Point2::new(5.0, 5.0)).expect("space");
+        assert!(space.reachable_count() > LARGE_SITE_CELLS);
+        let names: Vec<_> = members(&space, &PlanParams::default())
+            .iter()
+            .map(|m| (m.decomposition, m.pattern, m.lanes.placement))
+            .collect();
+        assert_eq!(
+            names,
+            vec![
+                (DecompositionMethod::Walls, PatternMethod::Lanes, Some(Placement::Fit)),
+                (DecompositionMethod::Single, PatternMethod::Spiral, None),
+            ]
+        );
     }
 
     #[test]

@@ -22,6 +22,18 @@ pub struct Leg {
 }
 
 impl Leg {
+    /// Where this leg starts and ends (the same point for a closed loop), without copying its vertices.
+    pub fn ends(&self, tasks: &[Task]) -> (Point2, Point2) {
+        let t = &tasks[self.task];
+        let pts = &t.points;
+        if t.is_closed() {
+            let p = pts[self.start_vertex % (pts.len() - 1)];
+            return (p, p);
+        }
+        let (first, last) = (pts[0], pts[pts.len() - 1]);
+        if self.reversed { (last, first) } else { (first, last) }
+    }
+
     /// The vertices of this leg in driving order.
     pub fn points(&self, tasks: &[Task]) -> Vec<Point2> {
         let t = &tasks[self.task];
@@ -206,7 +218,7 @@ fn reanchor_loops(tasks: &[Task], route: RegionRoute) -> RegionRoute {
             changed |= nearest != leg.start_vertex;
             leg.start_vertex = nearest;
         }
-        at = *leg.points(tasks).last().unwrap_or(&at);
+        at = leg.ends(tasks).1;
     }
     if !changed {
         return route;
@@ -233,9 +245,9 @@ fn legs_cost(tasks: &[Task], entry: Point2, legs: &[Leg], connect: &dyn Fn(Point
     let mut at = entry;
     let mut cost = 0.0;
     for l in legs {
-        let pts = l.points(tasks);
-        cost += connect(at, pts[0]) + tasks[l.task].length();
-        at = *pts.last().unwrap_or(&at);
+        let (first, last) = l.ends(tasks);
+        cost += connect(at, first) + tasks[l.task].length();
+        at = last;
     }
     cost
 }
@@ -284,14 +296,8 @@ fn route_sweep(tasks: &[Task], angle: f64, entry: Point2) -> RegionRoute {
     }
     // Cheapest insertion of every other task: the cost change of putting leg L between p (the previous
     // leg's end, or the entry) and q (the next leg's start, if any) is |p L.start| + |L.end q| − |p q|.
+    let mut ends: Vec<(Point2, Point2)> = legs.iter().map(|l| l.ends(tasks)).collect();
     for k in (0..tasks.len()).filter(|&k| tasks[k].kind != crate::pattern::TaskKind::Lane) {
-        let ends: Vec<(Point2, Point2)> = legs
-            .iter()
-            .map(|l| {
-                let pts = l.points(tasks);
-                (pts[0], pts[pts.len() - 1])
-            })
-            .collect();
         let mut best: Option<(f64, usize, Leg)> = None;
         for (a, b, leg) in task_options(tasks, k) {
             for pos in 0..=legs.len() {
@@ -307,10 +313,11 @@ fn route_sweep(tasks: &[Task], angle: f64, entry: Point2) -> RegionRoute {
         }
         if let Some((_, pos, leg)) = best {
             legs.insert(pos, leg);
+            ends.insert(pos, leg.ends(tasks));
         }
     }
     let cost = legs_cost(tasks, entry, &legs, &connect);
-    let exit = legs.last().map_or(entry, |l| *l.points(tasks).last().unwrap_or(&entry));
+    let exit = legs.last().map_or(entry, |l| l.ends(tasks).1);
     RegionRoute {
         legs,
         entry,
@@ -394,7 +401,7 @@ impl SearchProblem {
             .zip(&tour.options)
             .map(|(&n, &o)| self.legs_of[n][o])
             .collect();
-        let exit = legs.last().map_or(entry, |l| *l.points(tasks).last().unwrap_or(&entry));
+        let exit = legs.last().map_or(entry, |l| l.ends(tasks).1);
         RegionRoute {
             legs,
             entry,
