@@ -169,9 +169,6 @@ pub fn candidates(
             }
             continue;
         }
-        if reached.contains(&t) {
-            continue;
-        }
         let Some(r) = nearest_reachable.nearest_site_index(t) else {
             continue;
         };

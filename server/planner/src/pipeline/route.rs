@@ -549,6 +549,24 @@ mod tests {
     }
 
     #[test]
+    fn leg_ends_are_the_first_and_last_driven_points() {
+        let tasks = vec![lane(0.0), square(0.0, 1.0, 3)];
+        for task in 0..2 {
+            for reversed in [false, true] {
+                for start_vertex in [0, 4, 11] {
+                    let leg = Leg {
+                        task,
+                        reversed,
+                        start_vertex,
+                    };
+                    let pts = leg.points(&tasks);
+                    assert_eq!(leg.ends(&tasks), (pts[0], pts[pts.len() - 1]), "{leg:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
     fn closed_loops_return_to_their_start() {
         let ring = Task {
             points: vec![
