@@ -1,7 +1,8 @@
 //! Times each stage of a default plan on generated cluttered sites of growing size:
 //! `cargo run --release -p shift-planner --example plan_timing -- [SIDE_M ...]`; `first_region_ms` is when
 //! the first region of the final plan was ready (streamed to clients while the rest link). `STAGES=1`
-//! prints the progress timeline; `DECOMP`, `PATTERN` and `PLACE` fix the strategy.
+//! prints the progress timeline; `DECOMP`, `PATTERN` and `PLACE` fix the strategy; `NOISE=k` adds k single
+//! occupied cells per 100 m² (the speckle of real SLAM maps).
 
 use std::time::Instant;
 
@@ -18,7 +19,19 @@ fn main() {
         sides
     };
     for side in sides {
-        let grid = cluttered_site(side, side, 0.1, (side * side / 100.0) as usize, 7).expect("site");
+        let mut grid = cluttered_site(side, side, 0.1, (side * side / 100.0) as usize, 7).expect("site");
+        // NOISE=k: k single occupied cells per 100 m², like the speckle of a real SLAM map.
+        if let Some(k) = std::env::var("NOISE").ok().and_then(|v| v.parse::<f64>().ok()) {
+            let n = (k * side * side / 100.0) as u64;
+            let len = grid.cells.len() as u64;
+            let mut x = 0x9E37_79B9_7F4A_7C15_u64;
+            for _ in 0..n {
+                x ^= x << 13;
+                x ^= x >> 7;
+                x ^= x << 17;
+                grid.cells[(x % len) as usize] = shift_planner::map::CellState::Occupied;
+            }
+        }
         let t = Instant::now();
         let space = CoverageSpace::new(
             grid,

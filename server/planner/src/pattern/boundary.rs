@@ -14,6 +14,8 @@
 //! coverage target is met. A plan thus covers the edges wherever that is cheap, and spends extra driving on
 //! the last fractions of a percent only as far as the target asks.
 
+use std::collections::BinaryHeap;
+
 use super::contour::trace_cells;
 use super::excursion::{Excursion, Hosts};
 use super::lanes::RegionView;
@@ -185,10 +187,29 @@ pub fn candidates(
     out
 }
 
+/// A candidate's (possibly stale) yield and its index: a max-heap entry, the higher index first among equal
+/// yields.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Ranked(f64, usize);
+
+impl Eq for Ranked {}
+
+impl PartialOrd for Ranked {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for Ranked {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        self.0.total_cmp(&other.0).then(self.1.cmp(&other.1))
+    }
+}
+
 /// Greedy selection of candidates (see the module docs); stamps the chosen ones on `raster`.
 pub fn select(
     space: &CoverageSpace,
-    mut pool: Vec<Candidate>,
+    pool: Vec<Candidate>,
     raster: &mut CoverageRaster,
     params: &PassParams,
 ) -> Vec<Candidate> {
@@ -227,29 +248,34 @@ pub fn select(
     let mut chosen = Vec::new();
     // Lazy greedy: yields only fall as coverage grows, so a stale upper bound that still tops the heap after
     // a refresh is the true best.
-    let mut yields: Vec<f64> = pool
+    let mut heap: BinaryHeap<Ranked> = pool
         .iter()
-        .map(|c| gain(raster, &c.task) as f64 / c.cost(w, res))
+        .enumerate()
+        .map(|(k, c)| Ranked(gain(raster, &c.task) as f64 / c.cost(w, res), k))
+        .filter(|r| r.0 > 0.0)
         .collect();
-    while let Some(best) = (0..pool.len())
-        .filter(|&k| yields[k] > 0.0)
-        .max_by(|&a, &b| yields[a].total_cmp(&yields[b]))
-    {
-        let cells = gain(raster, &pool[best].task);
-        let fresh = cells as f64 / pool[best].cost(w, res);
-        if fresh + 1e-12 < yields[best] {
-            yields[best] = fresh;
+    let mut pool: Vec<Option<Candidate>> = pool.into_iter().map(Some).collect();
+    while let Some(Ranked(stale, k)) = heap.pop() {
+        let Some(candidate) = pool[k].as_ref() else {
+            continue;
+        };
+        let cells = gain(raster, &candidate.task);
+        let fresh = cells as f64 / candidate.cost(w, res);
+        if fresh + 1e-12 < stale {
+            if fresh > 0.0 {
+                heap.push(Ranked(fresh, k));
+            }
             continue;
         }
         let pct = covered as f64 / total as f64 * 100.0;
         if fresh < params.min_yield * lane_yield && pct >= params.coverage_target_pct {
             break;
         }
-        let c = pool.swap_remove(best);
-        yields.swap_remove(best);
-        raster.stamp_polyline(&c.task.points);
-        covered += cells;
-        chosen.push(c);
+        if let Some(c) = pool[k].take() {
+            raster.stamp_polyline(&c.task.points);
+            covered += cells;
+            chosen.push(c);
+        }
     }
     chosen
 }
