@@ -1,8 +1,10 @@
 //! Plans shared scenes with one decomposition and prints metrics and where the length goes:
 //! `cargo run --release -p shift-planner --example scene_stats -- DIR [DIR ...]`.
 //! Environment: `DECOMP` (auto, bcd, walls, …; default auto), `PATTERN` (lanes, spiral), `ORDER` (two-opt,
-//! rrt, anneal), `PASSES=0` to skip
-//! targeted passes.
+//! rrt, anneal), `PASSES=0` to skip targeted passes, `TARGET` / `MINY` (pass selection), `PLACE` (lattice,
+//! fit, framed), `DUMP=DIR` to write a PNG per scene (`CROP=x0,y0,x1,y1` in metres, `REGION=id` to draw only
+//! that region's route, red to blue in driving order), `LONG=1` for cover length per region and the long
+//! steps.
 
 use std::path::Path;
 use std::time::Instant;
