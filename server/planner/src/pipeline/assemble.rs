@@ -25,6 +25,7 @@ pub fn assemble(space: &CoverageSpace, prepared: Prepared, monitor: &mut dyn Pla
         tour,
         mut warnings,
         excursions_m,
+        linked,
         ..
     } = prepared;
     let mut path = Path::new(space.start);
@@ -49,10 +50,16 @@ pub fn assemble(space: &CoverageSpace, prepared: Prepared, monitor: &mut dyn Pla
         let first = path.waypoints.len() - 1;
         for leg in &route.legs {
             let pts = leg.points(&tasks[id]);
-            if let Some(step) = basis.wall_steps.along(space, path.last(), pts[0]) {
-                for &p in &step[1..] {
-                    path.push(p, WaypointKind::Cover, Some(id as u32));
-                }
+            // A step along a wall, or round an obstacle as found while costing the route, else straight or
+            // linked now.
+            let from = path.last();
+            let known = basis.wall_steps.along(space, from, pts[0]).or_else(|| {
+                (!space.segment_ok(from, pts[0]))
+                    .then(|| linked.get(from, pts[0]))
+                    .flatten()
+            });
+            for &p in known.iter().flat_map(|step| &step[1..]) {
+                path.push(p, WaypointKind::Cover, Some(id as u32));
             }
             if path.cover_to(space, pts[0], id as u32, &mut step_linker, &mut warnings) {
                 for &p in &pts[1..] {

@@ -45,6 +45,8 @@ pub struct Prepared {
     pub warnings: Vec<String>,
     /// Length that excursions to visits add to the main pattern's tasks, metres (targeted driving).
     pub excursions_m: f64,
+    /// The links found for steps through obstacles while the routes were costed (the assembly reuses them).
+    pub(crate) linked: Linked,
     /// What this plan is expected to give, before linking.
     pub estimate: Estimate,
 }
@@ -291,6 +293,7 @@ pub fn prepare(
         tour,
         warnings: space.warnings.clone(),
         excursions_m,
+        linked,
         estimate,
     })
 }
@@ -446,7 +449,7 @@ fn stamp_route(
 
 /// The links found for steps through obstacles while costing routes (either direction), so that the
 /// coverage estimate can stamp them too.
-#[derive(Debug, Default)]
+#[derive(Debug, Default, Clone)]
 pub(crate) struct Linked(std::cell::RefCell<std::collections::HashMap<[u64; 4], Vec<Point2>>>);
 
 impl Linked {
@@ -458,7 +461,7 @@ impl Linked {
         self.0.borrow_mut().insert(Self::key(a, b), path);
     }
 
-    fn get(&self, a: Point2, b: Point2) -> Option<Vec<Point2>> {
+    pub(crate) fn get(&self, a: Point2, b: Point2) -> Option<Vec<Point2>> {
         let map = self.0.borrow();
         map.get(&Self::key(a, b))
             .cloned()
