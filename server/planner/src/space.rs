@@ -164,11 +164,30 @@ impl CoverageSpace {
         self.clearance.at_point(p)
     }
 
+    /// A lower bound of `clearance_at(p)` from the distance stored at the centre of `p`'s cell alone
+    /// (clearance changes by at most the distance moved; the relative 1e-6 covers the f32 storage);
+    /// `-∞` off the map.
+    #[inline]
+    pub fn clearance_lower_bound(&self, p: Point2) -> f64 {
+        let g = self.geometry();
+        g.locate(p).map_or(f64::NEG_INFINITY, |c| {
+            let i = g.index(c);
+            self.clearance.at(i) * (1.0 - 1e-6) - (p - g.center_of(i)).norm() - 1e-9
+        })
+    }
+
+    /// True when `clearance_at(p) >= r`; the cheap [`CoverageSpace::clearance_lower_bound`] decides for most
+    /// points away from obstacles, the exact lookup for the rest.
+    #[inline]
+    pub fn has_clearance(&self, p: Point2, r: f64) -> bool {
+        self.clearance_lower_bound(p) >= r || self.clearance_at(p) >= r
+    }
+
     /// True when the robot centre may stand at `p`: on the reachable set with at least `radius` clearance.
     /// A point on a cell edge or corner (a diagonal step's midpoint) belongs to every cell that touches it.
     #[inline]
     pub fn point_ok(&self, p: Point2) -> bool {
-        if self.clearance_at(p) < self.robot.radius_m - 1e-9 {
+        if !self.has_clearance(p, self.robot.radius_m - 1e-9) {
             return false;
         }
         let g = self.geometry();
@@ -222,6 +241,33 @@ pub fn flood_fill8(g: &GridGeometry, mask: &[bool], seed: Cell) -> Vec<bool> {
 
 #[cfg(test)]
 mod tests {
+    /// The fast clearance test agrees with the exact clearance everywhere, on and off the map, near and
+    /// far from obstacles (oracle: `clearance_at`).
+    #[test]
+    fn clearance_test_agrees_with_the_exact_clearance() {
+        let (mut spaces, mut yes, mut no) = (0, 0, 0);
+        for seed in 1..=20_u64 {
+            let Some(space) = crate::decompose::tests::random_space(seed, 40, 30, 6) else {
+                continue;
+            };
+            spaces += 1;
+            for i in 0..=100 {
+                for j in 0..=80 {
+                    let p = Point2::new(-0.5 + 0.05 * i as f64 + 0.0013 * seed as f64, -0.5 + 0.05 * j as f64);
+                    for r in [0.0, 0.1, 0.2, 0.2 + 1e-7, 0.35, 0.8] {
+                        let fast = space.has_clearance(p, r);
+                        assert_eq!(fast, space.clearance_at(p) >= r, "seed {seed} {p:?} r {r}");
+                        if fast { yes += 1 } else { no += 1 }
+                    }
+                }
+            }
+        }
+        assert!(
+            spaces >= 10 && yes > 1000 && no > 1000,
+            "{spaces} spaces, {yes} clear, {no} not"
+        );
+    }
+
     #[test]
     fn coarsening_keeps_obstacles_and_the_start() {
         let g = GridGeometry::new(41, 30, 0.1, Point2::origin()).expect("valid");

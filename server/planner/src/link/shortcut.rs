@@ -34,14 +34,6 @@ fn samples(space: &CoverageSpace, a: Point2, b: Point2) -> impl Iterator<Item = 
     (0..=n).map(move |k| a + (b - a) * (k as f64 / n as f64))
 }
 
-/// A cheap lower bound of the clearance at `p` in cell `i`: the field is 1-Lipschitz, and the stored cell
-/// value is an f32 (relative error below 1e-7).
-#[inline]
-fn clearance_lower_bound(space: &CoverageSpace, i: usize, p: Point2) -> f64 {
-    let c = space.geometry().center_of(i);
-    space.clearance.at(i) * (1.0 - 1e-6) - (p - c).norm() - 1e-9
-}
-
 /// True when segment `a`–`b` passes `segment_ok` and every sample has clearance ≥ `need` metres.
 pub(crate) fn segment_keeps(space: &CoverageSpace, a: Point2, b: Point2, need: f64) -> bool {
     let g = space.geometry();
@@ -49,7 +41,7 @@ pub(crate) fn segment_keeps(space: &CoverageSpace, a: Point2, b: Point2, need: f
     samples(space, a, b).all(|p| {
         let Some(c) = g.locate(p) else { return false };
         let i = g.index(c);
-        space.reachable[i] && (clearance_lower_bound(space, i, p) >= threshold || space.clearance_at(p) >= threshold)
+        space.reachable[i] && space.has_clearance(p, threshold)
     })
 }
 
@@ -58,7 +50,7 @@ pub(crate) fn segment_keeps(space: &CoverageSpace, a: Point2, b: Point2, need: f
 fn segment_min_clearance_capped(space: &CoverageSpace, a: Point2, b: Point2, cap: f64) -> f64 {
     let g = space.geometry();
     samples(space, a, b).fold(cap, |m, p| match g.locate(p) {
-        Some(c) if clearance_lower_bound(space, g.index(c), p) >= m => m,
+        Some(_) if space.clearance_lower_bound(p) >= m => m,
         _ => m.min(space.clearance_at(p)),
     })
 }

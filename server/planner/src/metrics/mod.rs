@@ -116,7 +116,7 @@ pub fn count_collisions(space: &CoverageSpace, path: &[Point2]) -> usize {
     let step = space.geometry().resolution * 0.25;
     let mut n = 0;
     if let [p] = path {
-        return usize::from(space.clearance_at(*p) < r);
+        return usize::from(!space.has_clearance(*p, r));
     }
     for (k, s) in path.windows(2).enumerate() {
         let len = (s[1] - s[0]).norm();
@@ -124,7 +124,7 @@ pub fn count_collisions(space: &CoverageSpace, path: &[Point2]) -> usize {
         let first = if k == 0 { 0 } else { 1 };
         for j in first..=m {
             let p = s[0] + (s[1] - s[0]) * (j as f64 / m as f64);
-            if space.clearance_at(p) < r {
+            if !space.has_clearance(p, r) {
                 n += 1;
             }
         }

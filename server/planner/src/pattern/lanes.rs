@@ -275,7 +275,7 @@ pub fn lanes_at(
         match g.locate(p) {
             Some(c) => {
                 let i = g.index(c);
-                region.labels[i] == region.id && (!exact || space.clearance_at(p) >= end_clearance)
+                region.labels[i] == region.id && (!exact || space.has_clearance(p, end_clearance))
             }
             None => false,
         }

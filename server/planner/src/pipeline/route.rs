@@ -169,7 +169,7 @@ pub fn through_obstacle(space: &CoverageSpace, a: Point2, b: Point2) -> bool {
     let r = space.robot.radius_m;
     let step = (0.5 * r).max(space.geometry().resolution);
     let n = (d / step).ceil() as usize;
-    (0..=n).any(|k| space.clearance_at(a + (b - a) * (k as f64 / n.max(1) as f64)) < 0.5 * r)
+    (0..=n).any(|k| !space.has_clearance(a + (b - a) * (k as f64 / n.max(1) as f64), 0.5 * r))
 }
 
 /// Orders `tasks` as an open tour starting at `entry`: the better of the local-search tour and the plain
