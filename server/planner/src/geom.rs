@@ -16,6 +16,11 @@ pub fn point_segment_distance(p: Point2, a: Point2, b: Point2) -> f64 {
     (p - (a + ab * t)).norm()
 }
 
+/// The exact bits of the directed pair `a` → `b`: a key for memo tables of per-connection results.
+pub fn pair_key(a: Point2, b: Point2) -> [u64; 4] {
+    [a.x.to_bits(), a.y.to_bits(), b.x.to_bits(), b.y.to_bits()]
+}
+
 /// Total length of a polyline (metres).
 pub fn polyline_length(points: &[Point2]) -> f64 {
     points.windows(2).map(|w| (w[1] - w[0]).norm()).sum()

@@ -54,8 +54,9 @@ pub struct Hosts {
 }
 
 impl Hosts {
-    /// Indexes the lane, ring and frame segments of `tasks` for queries within `reach_m`.
-    pub fn new(tasks: &[Task], reach_m: f64) -> Self {
+    /// Indexes the lane, ring and frame segments of `tasks` (buckets one [`MAX_REACH_WIDTHS`] wide).
+    pub fn new(space: &CoverageSpace, tasks: &[Task]) -> Self {
+        let reach_m = MAX_REACH_WIDTHS * space.robot.tool_width_m;
         let segments: Vec<(usize, usize, Point2, Point2)> = tasks
             .iter()
             .enumerate()
@@ -253,7 +254,7 @@ mod tests {
     fn excursion_stops_where_the_tool_reaches_the_target() {
         let space = room();
         let tasks = vec![task(&[(0.5, 1.0), (1.5, 1.0)], TaskKind::Lane)];
-        let hosts = Hosts::new(&tasks, MAX_REACH_WIDTHS * 0.4);
+        let hosts = Hosts::new(&space, &tasks);
         let e = hosts.excursion_to(&space, Point2::new(1.2, 1.5)).expect("in reach");
         assert_eq!((e.task, e.segment), (0, 0));
         assert!((e.at - Point2::new(1.2, 1.0)).norm() < 1e-9);
@@ -269,7 +270,7 @@ mod tests {
     fn no_excursion_through_a_wall_or_out_of_reach() {
         let space = room();
         let tasks = vec![task(&[(1.5, 0.5), (1.5, 1.5)], TaskKind::Lane)];
-        let hosts = Hosts::new(&tasks, MAX_REACH_WIDTHS * 0.4);
+        let hosts = Hosts::new(&space, &tasks);
         // Behind the wall at x = 2 m.
         assert_eq!(hosts.excursion_to(&space, Point2::new(2.6, 1.0)), None);
         // 1.5 tool widths (0.6 m) of driving is the limit.
@@ -281,7 +282,7 @@ mod tests {
             task(&[(1.0, 1.0), (1.0, 1.2)], TaskKind::Boundary),
         ];
         assert_eq!(
-            Hosts::new(&visits, 0.6).excursion_to(&space, Point2::new(1.0, 1.5)),
+            Hosts::new(&space, &visits).excursion_to(&space, Point2::new(1.0, 1.5)),
             None
         );
     }
@@ -290,7 +291,7 @@ mod tests {
     fn long_hosts_get_a_gentle_bump_instead_of_a_reversal() {
         let space = room();
         let mut tasks = vec![task(&[(0.3, 2.5), (3.5, 2.5)], TaskKind::Lane)];
-        let hosts = Hosts::new(&tasks, 0.6);
+        let hosts = Hosts::new(&space, &tasks);
         let e = hosts.excursion_to(&space, Point2::new(1.5, 2.8)).expect("in reach");
         let out_and_back = e.length();
         let added = splice(&space, &mut tasks, vec![e]);
@@ -308,7 +309,7 @@ mod tests {
         let space = room();
         let ring = [(0.5, 0.5), (1.5, 0.5), (1.5, 1.5), (0.5, 1.5), (0.5, 0.5)];
         let mut tasks = vec![task(&ring, TaskKind::Ring)];
-        let hosts = Hosts::new(&tasks, 0.6);
+        let hosts = Hosts::new(&space, &tasks);
         // Inside the ring's swath, 0.25 m from the first side and 0.3 m from the next.
         let far = hosts
             .excursion_to(&space, Point2::new(1.2, 0.75))

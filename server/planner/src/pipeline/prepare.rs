@@ -7,13 +7,13 @@ use std::sync::{Arc, OnceLock};
 
 use crate::decompose::{DecomposeParams, NO_REGION, Regions, decompose};
 use crate::error::{PlannerError, Result};
-use crate::geom::{Point2, polyline_length};
+use crate::geom::{Point2, pair_key, polyline_length};
 use crate::link::{LinkParams, Linker, geodesic_matrix};
 use crate::map::DistanceField;
 use crate::metrics::{CoverageRaster, coverage_of};
 use crate::order::{DistanceMatrix, SolveBudget, Tour, TourOption, TourProblem};
 use crate::pattern::boundary::{candidates, select};
-use crate::pattern::excursion::{Hosts, MAX_REACH_WIDTHS, splice};
+use crate::pattern::excursion::{Hosts, splice};
 use crate::pattern::frame::frame_tasks;
 use crate::pattern::lanes::{LaneParams, Placement, RegionView, best_angle, plan_lanes};
 use crate::pattern::spiral::plan_rings;
@@ -317,10 +317,9 @@ fn add_passes(
     excursions_m: &mut f64,
 ) -> Vec<usize> {
     let count = basis.regions.count;
-    let reach_m = MAX_REACH_WIDTHS * space.robot.tool_width_m;
     let mut pool = Vec::new();
     for (id, region_tasks) in tasks.iter().enumerate() {
-        let hosts = Hosts::new(region_tasks, reach_m);
+        let hosts = Hosts::new(space, region_tasks);
         pool.extend(candidates(
             space,
             basis.view(id),
@@ -453,19 +452,15 @@ fn stamp_route(
 pub(crate) struct Linked(std::cell::RefCell<std::collections::HashMap<[u64; 4], Vec<Point2>>>);
 
 impl Linked {
-    fn key(a: Point2, b: Point2) -> [u64; 4] {
-        [a.x.to_bits(), a.y.to_bits(), b.x.to_bits(), b.y.to_bits()]
-    }
-
     fn keep(&self, a: Point2, b: Point2, path: Vec<Point2>) {
-        self.0.borrow_mut().insert(Self::key(a, b), path);
+        self.0.borrow_mut().insert(pair_key(a, b), path);
     }
 
     pub(crate) fn get(&self, a: Point2, b: Point2) -> Option<Vec<Point2>> {
         let map = self.0.borrow();
-        map.get(&Self::key(a, b))
+        map.get(&pair_key(a, b))
             .cloned()
-            .or_else(|| map.get(&Self::key(b, a)).map(|p| p.iter().rev().copied().collect()))
+            .or_else(|| map.get(&pair_key(b, a)).map(|p| p.iter().rev().copied().collect()))
     }
 }
 

@@ -5,7 +5,7 @@
 use std::cell::RefCell;
 use std::collections::HashMap;
 
-use crate::geom::{Point2, Vector2, direction};
+use crate::geom::{Point2, Vector2, direction, pair_key};
 use crate::order::{DistanceMatrix, OrderMethod, SolveBudget, TourOption, TourProblem};
 use crate::pattern::Task;
 use crate::space::CoverageSpace;
@@ -514,7 +514,7 @@ pub fn region_options(tasks: &[Task], angle: f64, search: &RouteSearch<'_>) -> V
         // Routes from different corners share most of their steps: each is looked at once.
         let known: RefCell<HashMap<[u64; 4], f64>> = RefCell::default();
         let driven = |a: Point2, b: Point2| {
-            let key = [a.x.to_bits(), a.y.to_bits(), b.x.to_bits(), b.y.to_bits()];
+            let key = pair_key(a, b);
             if let Some(&d) = known.borrow().get(&key) {
                 return d;
             }
@@ -540,6 +540,16 @@ mod tests {
     use super::*;
     use crate::pattern::TaskKind;
 
+    /// A straight-line search with `iterations` moves.
+    fn search(iterations: u64) -> RouteSearch<'static> {
+        RouteSearch {
+            seed: 1,
+            iterations,
+            stop: None,
+            exact: None,
+        }
+    }
+
     fn lane(y: f64) -> Task {
         Task {
             points: vec![Point2::new(0.0, y), Point2::new(5.0, y)],
@@ -550,12 +560,7 @@ mod tests {
     #[test]
     fn lanes_are_driven_as_a_zigzag() {
         let tasks: Vec<Task> = (0..6).map(|k| lane(k as f64 * 0.3)).collect();
-        let search = RouteSearch {
-            seed: 1,
-            iterations: 10_000,
-            stop: None,
-            exact: None,
-        };
+        let search = search(10_000);
         let r = route_from(&tasks, 0.0, Point2::new(0.0, 0.0), &search);
         assert_eq!(r.legs.len(), 6);
         let mut seen: Vec<usize> = r.legs.iter().map(|l| l.task).collect();
@@ -592,12 +597,7 @@ mod tests {
     fn nested_rings_are_entered_next_to_where_the_route_arrives() {
         // Rings 0.3 m apart; each may start at any of its vertices, not only at its corners.
         let tasks = vec![square(0.0, 4.0, 8), square(0.3, 3.7, 8)];
-        let search = RouteSearch {
-            seed: 1,
-            iterations: 10_000,
-            stop: None,
-            exact: None,
-        };
+        let search = search(10_000);
         let r = route_from(&tasks, 0.0, Point2::new(2.0, 0.0), &search);
         assert_eq!(r.legs.len(), 2);
         // 16 m + 13.6 m of rings; every step runs 0.3 m straight across from where the route arrives (at
@@ -630,12 +630,7 @@ mod tests {
             })
             .collect();
         assert!(SearchProblem::new(&tasks).is_none(), "too large for one search");
-        let search = RouteSearch {
-            seed: 1,
-            iterations: 200_000,
-            stop: None,
-            exact: None,
-        };
+        let search = search(200_000);
         let entry = Point2::new(0.0, 0.0);
         let swept = route_sweep(&tasks, 0.0, entry);
         let r = route_from(&tasks, 0.0, entry, &search);
