@@ -11,9 +11,9 @@ use shift_planner::baseline::{Baseline, run_baseline};
 use shift_planner::decompose::DecompositionMethod;
 use shift_planner::geom::Point2;
 use shift_planner::order::OrderMethod;
-use shift_planner::pipeline::{NoMonitor, PlanOutput, PlanParams, plan};
+use shift_planner::pipeline::{NoMonitor, PlanOutput, PlanParams, plan_shaped};
 use shift_planner::space::{CoverageSpace, RobotShape};
-use shift_planner::speed::{AttributeMap, SpeedLimits, SpeedParams, profile_path};
+use shift_planner::speed::{AttributeMap, SpeedLimits, SpeedParams, SpeedProfile, profile_path};
 
 use crate::render::render_png;
 use crate::scene_io::{load_attribute, load_scene, scene_attribute_path, scene_dirs};
@@ -76,8 +76,12 @@ pub fn run_eval(root: &Path, render: Option<&Path>, mut on_row: impl FnMut(&Eval
         let (name, space, attribute) = scene_space(&dir)?;
         let limits = SpeedLimits::default();
         let speed = SpeedParams::new(limits, space.robot.tool_width_m);
-        let mut emit = |decomposition: &str, order: &str, pattern: &str, out: &PlanOutput, ms: f64| -> Result<()> {
-            let profile = profile_path(&space, &out.waypoints, attribute.as_ref(), &speed)?;
+        let mut emit = |decomposition: &str,
+                        order: &str,
+                        pattern: &str,
+                        (out, profile): (&PlanOutput, &SpeedProfile),
+                        ms: f64|
+         -> Result<()> {
             let m = profile.metrics;
             let d = profile.dwell;
             let row = EvalRow {
@@ -99,7 +103,7 @@ pub fn run_eval(root: &Path, render: Option<&Path>, mut on_row: impl FnMut(&Eval
                 render_png(
                     &space,
                     out,
-                    Some((&profile, &limits)),
+                    Some((profile, &limits)),
                     &dir.join(format!("{name}-{decomposition}-{order}-{pattern}.png")),
                     900,
                 )?;
@@ -122,7 +126,8 @@ pub fn run_eval(root: &Path, render: Option<&Path>, mut on_row: impl FnMut(&Eval
                     ..PlanParams::default()
                 };
                 let t = Instant::now();
-                let out = plan(&space, &params, &mut NoMonitor)?;
+                // With an attribute map the strategy is chosen on the profiled dwell (part of planning).
+                let (out, profile) = plan_shaped(&space, &params, attribute.as_ref(), &speed, &mut NoMonitor)?;
                 let ms = t.elapsed().as_secs_f64() * 1e3;
                 if d == DecompositionMethod::default() && o == OrderMethod::default() {
                     default_len = out.metrics.length_m;
@@ -133,14 +138,15 @@ pub fn run_eval(root: &Path, render: Option<&Path>, mut on_row: impl FnMut(&Eval
                 } else {
                     d.name().to_owned()
                 };
-                emit(&dname, o.name(), out.pattern.name(), &out, ms)?;
+                emit(&dname, o.name(), out.pattern.name(), (&out, &profile), ms)?;
             }
         }
         for b in Baseline::ALL {
             let t = Instant::now();
             let out = run_baseline(&space, b, 1, default_len)?;
             let ms = t.elapsed().as_secs_f64() * 1e3;
-            emit("none", b.name(), "baseline", &out, ms)?;
+            let profile = profile_path(&space, &out.waypoints, attribute.as_ref(), &speed)?;
+            emit("none", b.name(), "baseline", (&out, &profile), ms)?;
         }
     }
     Ok(rows)

@@ -10,9 +10,9 @@ use shift_planner::decompose::DecompositionMethod;
 use shift_planner::geom::Point2;
 use shift_planner::order::OrderMethod;
 use shift_planner::pattern::PatternMethod;
-use shift_planner::pipeline::{NoMonitor, PlanParams, plan};
+use shift_planner::pipeline::{NoMonitor, PlanParams, plan_shaped};
 use shift_planner::space::{CoverageSpace, RobotShape};
-use shift_planner::speed::{SpeedLimits, SpeedParams, profile_path};
+use shift_planner::speed::{SpeedLimits, SpeedParams};
 use shiftd::eval::{TABLE_HEADER, run_eval, table_line};
 use shiftd::plan_doc::to_document;
 use shiftd::render::render_png;
@@ -255,12 +255,11 @@ fn cmd_plan(args: PlanArgs) -> Result<()> {
         seed: args.seed,
         ..PlanParams::default()
     };
-    let out = plan(&space, &params, &mut NoMonitor)?;
     let mut speed = SpeedParams::new(limits, space.robot.tool_width_m);
     if args.no_smooth {
         speed.smooth = None;
     }
-    let profile = profile_path(&space, &out.waypoints, attribute.as_ref(), &speed)?;
+    let (out, profile) = plan_shaped(&space, &params, attribute.as_ref(), &speed, &mut NoMonitor)?;
     let ms = t.elapsed().as_secs_f64() * 1e3;
     warnings.extend(out.warnings.iter().cloned());
     for w in &warnings {

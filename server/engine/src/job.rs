@@ -5,10 +5,10 @@ use std::sync::Arc;
 
 use shift_planner::geom::Point2;
 use shift_planner::map::grid::{CellState, GridGeometry, OccupancyGrid};
-use shift_planner::pipeline::{PlanMonitor, PlanOutput, PlanParams, plan};
+use shift_planner::pipeline::{PlanMonitor, PlanOutput, PlanParams, plan_shaped};
 use shift_planner::space::{CoverageSpace, RobotShape};
 use shift_planner::speed::attribute::{AttributeBlob, AttributeMap};
-use shift_planner::speed::{SpeedLimits, SpeedParams, SpeedProfile, profile_path};
+use shift_planner::speed::{SpeedLimits, SpeedParams, SpeedProfile};
 use shift_proto::{AttributeDoc, PlanRequest};
 
 use crate::request::{ParsedOptions, point_in_polygon};
@@ -111,17 +111,16 @@ pub fn run_job(job: &PlanJob, monitor: &mut dyn PlanMonitor) -> shift_planner::R
         seed: job.options.seed,
         ..PlanParams::default()
     };
-    let output = plan(&space, &params, monitor)?;
-    if monitor.cancelled() {
-        return Err(shift_planner::PlannerError::Cancelled);
-    }
     let attribute = match &job.request.attribute {
         Some(a) => Some(attribute_map(a, space.grid.geometry)?),
         None => None,
     };
     let limits = SpeedLimits::new(r.v_min, r.v_max, r.a_max);
     let speed = SpeedParams::new(limits, r.tool_width);
-    let profile = profile_path(&space, &output.waypoints, attribute.as_ref(), &speed)?;
+    let (output, profile) = plan_shaped(&space, &params, attribute.as_ref(), &speed, monitor)?;
+    if monitor.cancelled() {
+        return Err(shift_planner::PlannerError::Cancelled);
+    }
     Ok(JobResult {
         space,
         output,

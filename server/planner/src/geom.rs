@@ -16,6 +16,14 @@ pub fn point_segment_distance(p: Point2, a: Point2, b: Point2) -> f64 {
     (p - (a + ab * t)).norm()
 }
 
+/// True when the segments `a`–`b` and `c`–`d` cross at a point inside both (touching ends do not count).
+pub fn segments_cross(a: Point2, b: Point2, c: Point2, d: Point2) -> bool {
+    let side = |p: Point2, q: Point2, r: Point2| (q - p).perp(&(r - p));
+    let (d1, d2) = (side(a, b, c), side(a, b, d));
+    let (d3, d4) = (side(c, d, a), side(c, d, b));
+    d1 * d2 < 0.0 && d3 * d4 < 0.0
+}
+
 /// The exact bits of the directed pair `a` → `b`: a key for memo tables of per-connection results.
 pub fn pair_key(a: Point2, b: Point2) -> [u64; 4] {
     [a.x.to_bits(), a.y.to_bits(), b.x.to_bits(), b.y.to_bits()]

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use shift_planner::geom::Point2;
 use shift_planner::map::load_ros_map;
 use shift_planner::metrics::dwell::spearman;
-use shift_planner::pipeline::{NoMonitor, PlanParams, WaypointKind, plan};
+use shift_planner::pipeline::{NoMonitor, PlanParams, WaypointKind, plan, plan_shaped};
 use shift_planner::space::{CoverageSpace, RobotShape};
 use shift_planner::speed::{AttributeMap, SpeedLimits, SpeedParams, profile_path};
 
@@ -63,9 +63,15 @@ fn profiles_meet_the_bar_on_every_shared_scene() {
     let mut failures = Vec::new();
     for dir in dirs {
         let (space, attribute) = load(&dir);
-        let out = plan(&space, &PlanParams::default(), &mut NoMonitor).expect("plan");
         let params = SpeedParams::new(limits, space.robot.tool_width_m);
-        let prof = profile_path(&space, &out.waypoints, attribute.as_ref(), &params).expect("profile");
+        let (_, prof) = plan_shaped(
+            &space,
+            &PlanParams::default(),
+            attribute.as_ref(),
+            &params,
+            &mut NoMonitor,
+        )
+        .expect("plan");
         let wps = &prof.waypoints;
         let mut worst_accel: f64 = 0.0;
         for w in wps.windows(2) {
@@ -127,7 +133,7 @@ fn profiles_meet_the_bar_on_every_shared_scene() {
 }
 
 /// Diagnostics (run with --ignored --nocapture; SHIFT_EXTRA_TIME=x sets the refinement's time allowance,
-/// SHIFT_DECOMPOSITION=bcd|walls|… the plan's decomposition): the
+/// SHIFT_DECOMPOSITION=bcd|walls|… and SHIFT_PATTERN=lanes|spiral fix the plan's strategy): the
 /// dwell CVs with transits counted as working too, and the spread of deposit / desire.
 #[test]
 #[ignore]
@@ -142,6 +148,9 @@ fn diagnose_deposit() {
         let mut plan_params = PlanParams::default();
         if let Some(d) = std::env::var("SHIFT_DECOMPOSITION").ok().and_then(|s| s.parse().ok()) {
             plan_params.decomposition = d;
+        }
+        if let Some(p) = std::env::var("SHIFT_PATTERN").ok().and_then(|s| s.parse().ok()) {
+            plan_params.pattern = p;
         }
         let out = plan(&space, &plan_params, &mut NoMonitor).expect("plan");
         let mut params = SpeedParams::new(SpeedLimits::default(), space.robot.tool_width_m);

@@ -62,21 +62,8 @@ mod tests {
     fn a_walled_room_is_framed_by_one_closed_loop_that_keeps_clearance() {
         let g = GridGeometry::new(40, 30, 0.05, Point2::origin()).expect("valid");
         let space = crate::decompose::tests::small_robot_space(OccupancyGrid::filled(g, CellState::Free));
-        let labels: Vec<u32> = (0..g.len())
-            .map(|i| if space.reachable[i] { 0 } else { u32::MAX })
-            .collect();
-        let cells: Vec<usize> = (0..g.len()).filter(|&i| space.reachable[i]).collect();
-        let targets: Vec<usize> = (0..g.len()).filter(|&i| space.coverable[i]).collect();
-        let target_labels: Vec<u32> = (0..g.len())
-            .map(|i| if space.coverable[i] { 0 } else { u32::MAX })
-            .collect();
-        let view = RegionView {
-            id: 0,
-            labels: &labels,
-            target_labels: &target_labels,
-            cells: &cells,
-            targets: &targets,
-        };
+        let region = crate::pattern::WholeRegion::new(&space);
+        let view = region.view();
         let frame = frame_tasks(&space, view);
         assert_eq!(frame.len(), 1, "{frame:?}");
         assert!(frame[0].is_closed());

@@ -1,7 +1,8 @@
 //! In-region coverage patterns: what a region's sweep is made of.
 //!
 //! A pattern turns one region into [`Task`]s — polylines the robot must drive, in either direction: the
-//! boustrophedon lanes ([`lanes`]), the rings of a spiral ([`spiral`]), and the targeted passes that cover
+//! boustrophedon lanes ([`lanes`]), the rings of a spiral ([`spiral`]) spliced into one loop
+//! ([`ring_splice`]), and the targeted passes that cover
 //! what those miss ([`boundary`]: stretches of the wall contour, excursions from the pattern into pockets
 //! next to it ([`excursion`]), and single visits into the other pockets), and the
 //! frame along a region's walls that inset lanes leave to it ([`frame`]). Ordering
@@ -12,6 +13,7 @@ pub mod contour;
 pub mod excursion;
 pub mod frame;
 pub mod lanes;
+pub mod ring_splice;
 pub mod spiral;
 
 use crate::geom::Point2;
@@ -83,5 +85,38 @@ impl std::str::FromStr for PatternMethod {
             .into_iter()
             .find(|m| m.name() == s)
             .ok_or_else(|| format!("unknown pattern {s:?}; expected lanes or spiral"))
+    }
+}
+
+/// Test support: the whole reachable set of a space as region 0.
+#[cfg(test)]
+pub(crate) struct WholeRegion {
+    labels: Vec<u32>,
+    target_labels: Vec<u32>,
+    cells: Vec<usize>,
+    targets: Vec<usize>,
+}
+
+#[cfg(test)]
+impl WholeRegion {
+    pub(crate) fn new(space: &crate::space::CoverageSpace) -> Self {
+        let n = space.geometry().len();
+        let label = |on: &[bool]| (0..n).map(|i| if on[i] { 0 } else { u32::MAX }).collect();
+        Self {
+            labels: label(&space.reachable),
+            target_labels: label(&space.coverable),
+            cells: (0..n).filter(|&i| space.reachable[i]).collect(),
+            targets: (0..n).filter(|&i| space.coverable[i]).collect(),
+        }
+    }
+
+    pub(crate) fn view(&self) -> lanes::RegionView<'_> {
+        lanes::RegionView {
+            id: 0,
+            labels: &self.labels,
+            target_labels: &self.target_labels,
+            cells: &self.cells,
+            targets: &self.targets,
+        }
     }
 }

@@ -5,6 +5,8 @@ mod assemble;
 mod portfolio;
 pub mod prepare;
 pub mod route;
+pub mod shaped;
+pub use shaped::plan_shaped;
 pub mod wall_steps;
 
 use crate::decompose::{DecomposeParams, DecompositionMethod};
@@ -23,6 +25,9 @@ use crate::space::CoverageSpace;
 /// walls/lattice 10.42 %, bcd 13.95–20.7 % overlap) instead of bcd and walls × lattice, fit and framed lanes
 /// plus the spiral: every member is a full preparation, and on a large site each takes seconds.
 pub const LARGE_SITE_CELLS: usize = 1_000_000;
+
+/// Overlap a plan may have and still count as economical (the acceptance bar of the planner, percent).
+pub const OVERLAP_BAR_PCT: f64 = 20.0;
 
 /// Everything a plan request can choose. `Default` is the best combination.
 #[derive(Debug, Clone, PartialEq)]

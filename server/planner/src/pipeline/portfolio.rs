@@ -3,7 +3,8 @@
 //! the winner is linked — so links are searched once, and the monitor's region-ready calls are final.
 //!
 //! Ranking: plans that meet the coverage bar beat those that do not; then the least estimated overlap
-//! (DESIGN §6: for equal coverage, the shortest path); earlier members win ties.
+//! (DESIGN §6: for equal coverage, the shortest path); earlier members win ties. When speeds follow an
+//! attribute map, the best few are linked and the profiled dwell decides among them ([`super::shaped`]).
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, mpsc};
@@ -30,6 +31,20 @@ const POLL: Duration = Duration::from_millis(10);
 /// once. Which strategy wins does not depend on the threads: every one is prepared and they are ranked in
 /// member order.
 pub fn plan(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanMonitor) -> Result<PlanOutput> {
+    let best = prepare_ranked(space, params, monitor)?
+        .into_iter()
+        .next()
+        .ok_or(PlannerError::Cancelled)?;
+    assemble(space, best, monitor)
+}
+
+/// Every strategy `params` leaves open, prepared up to its tour and ranked best first (ties in member
+/// order); `monitor` sees progress 0 … 0.75.
+pub fn prepare_ranked(
+    space: &CoverageSpace,
+    params: &PlanParams,
+    monitor: &mut dyn PlanMonitor,
+) -> Result<Vec<Prepared>> {
     let members = members(space, params);
     let n = members.len();
     let threads = match params.threads {
@@ -66,19 +81,27 @@ pub fn plan(space: &CoverageSpace, params: &PlanParams, monitor: &mut dyn PlanMo
     if monitor.cancelled() || cancel.load(Ordering::Relaxed) {
         return Err(PlannerError::Cancelled);
     }
-    let target = params.passes.coverage_target_pct.min(99.0);
-    let mut best: Option<Prepared> = None;
-    for p in prepared {
-        let candidate = p.ok_or(PlannerError::Cancelled)??;
-        if best
-            .as_ref()
-            .is_none_or(|b| better(&candidate.estimate, &b.estimate, target))
-        {
-            best = Some(candidate);
+    let target = coverage_bar(params);
+    let mut ranked = prepared
+        .into_iter()
+        .map(|p| p.ok_or(PlannerError::Cancelled)?)
+        .collect::<Result<Vec<Prepared>>>()?;
+    // A stable sort: equal estimates keep member order.
+    ranked.sort_by(|a, b| {
+        if better(&a.estimate, &b.estimate, target) {
+            std::cmp::Ordering::Less
+        } else if better(&b.estimate, &a.estimate, target) {
+            std::cmp::Ordering::Greater
+        } else {
+            std::cmp::Ordering::Equal
         }
-    }
-    let best = best.ok_or(PlannerError::Cancelled)?;
-    assemble(space, best, monitor)
+    });
+    Ok(ranked)
+}
+
+/// The coverage a plan must reach to count as complete (DESIGN §6 bar, or the request's lower target).
+pub fn coverage_bar(params: &PlanParams) -> f64 {
+    params.passes.coverage_target_pct.min(99.0)
 }
 
 /// Runs `job(0..count)` on up to `threads` scoped threads while the calling thread waits on their

@@ -16,6 +16,7 @@ use crate::pattern::boundary::{candidates, select};
 use crate::pattern::excursion::{Hosts, splice};
 use crate::pattern::frame::frame_tasks;
 use crate::pattern::lanes::{LaneParams, Placement, RegionView, best_angle, plan_lanes};
+use crate::pattern::ring_splice::splice_rings;
 use crate::pattern::spiral::plan_rings;
 use crate::pattern::{PatternMethod, Task};
 use crate::space::CoverageSpace;
@@ -195,7 +196,7 @@ pub fn prepare(
                 (angle, t)
             }
             PatternMethod::Lanes => plan_lanes(space, view(id), &fixed(id)),
-            PatternMethod::Spiral => (0.0, plan_rings(space, view(id))),
+            PatternMethod::Spiral => (0.0, splice_rings(space, plan_rings(space, view(id)))),
         };
         for task in &t {
             raster.stamp_polyline(&task.points);

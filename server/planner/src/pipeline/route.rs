@@ -351,10 +351,31 @@ fn route_sweep(tasks: &[Task], angle: f64, entry: Point2) -> RegionRoute {
         });
         at = if reversed { a } else { b };
     }
+    // Chained pieces (a spliced ring loop) in their order, the nearest run first, each from its piece
+    // nearest to where the route is.
+    let mut in_backbone: Vec<bool> = tasks.iter().map(|t| t.kind == crate::pattern::TaskKind::Lane).collect();
+    let mut runs = chained_runs(tasks);
+    while !runs.is_empty() {
+        let Some((r, (_, first, backwards))) = runs
+            .iter()
+            .map(|run| run_from(tasks, run, at))
+            .enumerate()
+            .min_by(|a, b| a.1.0.total_cmp(&b.1.0))
+        else {
+            break;
+        };
+        let run_legs = run_legs(&runs[r], first, backwards);
+        for l in &run_legs {
+            in_backbone[l.task] = true;
+        }
+        at = run_legs.last().map_or(at, |l| l.ends(tasks).1);
+        legs.extend(run_legs);
+        runs.swap_remove(r);
+    }
     // Cheapest insertion of every other task: the cost change of putting leg L between p (the previous
     // leg's end, or the entry) and q (the next leg's start, if any) is |p L.start| + |L.end q| − |p q|.
     let mut ends: Vec<(Point2, Point2)> = legs.iter().map(|l| l.ends(tasks)).collect();
-    for k in (0..tasks.len()).filter(|&k| tasks[k].kind != crate::pattern::TaskKind::Lane) {
+    for k in (0..tasks.len()).filter(|&k| !in_backbone[k]) {
         // Per position: where the route is (p) and the connection to the next leg it replaces (|p q|).
         let at = |pos: usize| if pos == 0 { entry } else { ends[pos - 1].1 };
         let gaps: Vec<Option<(Point2, f64)>> = (0..=legs.len())
@@ -391,6 +412,73 @@ fn route_sweep(tasks: &[Task], angle: f64, entry: Point2) -> RegionRoute {
         exit,
         cost,
     }
+}
+
+/// Runs of at least two consecutive open tasks whose ends meet (the pieces of a spliced ring loop, in
+/// driving order).
+fn chained_runs(tasks: &[Task]) -> Vec<Vec<usize>> {
+    let mut runs: Vec<Vec<usize>> = Vec::new();
+    let mut run: Vec<usize> = Vec::new();
+    for (k, t) in tasks.iter().enumerate() {
+        let open = !t.is_closed() && t.points.len() >= 2;
+        let follows = run
+            .last()
+            .is_some_and(|&j| open && tasks[j].points.last() == t.points.first());
+        if !follows {
+            if run.len() >= 2 {
+                runs.push(std::mem::take(&mut run));
+            }
+            run.clear();
+        }
+        if open {
+            run.push(k);
+        }
+    }
+    if run.len() >= 2 {
+        runs.push(run);
+    }
+    runs
+}
+
+/// The cheapest way to drive a chained run from `at`: forwards or backwards and, when its last piece ends
+/// where its first begins, from whichever piece is nearest. Returns the connection cost, the first piece
+/// (index into `run`) and whether the run is driven backwards.
+fn run_from(tasks: &[Task], run: &[usize], at: Point2) -> (f64, usize, bool) {
+    let n = run.len();
+    let cyclic = tasks[run[n - 1]].points.last() == tasks[run[0]].points.first();
+    let starts = if cyclic { n } else { 1 };
+    let mut best = (f64::INFINITY, 0, false);
+    for s in 0..starts {
+        // Backwards from `s` starts at the end of the piece before it (the last piece of an open run).
+        let last = (s + n - 1) % n;
+        let options = [
+            (tasks[run[s]].points[0], s, false),
+            (tasks[run[last]].points[tasks[run[last]].points.len() - 1], last, true),
+        ];
+        for (p, first, backwards) in options {
+            let c = euclidean(at, p);
+            if c < best.0 {
+                best = (c, first, backwards);
+            }
+        }
+    }
+    best
+}
+
+/// The legs of `run` driven from its piece `first`, forwards or backwards.
+fn run_legs(run: &[usize], first: usize, backwards: bool) -> Vec<Leg> {
+    let n = run.len();
+    (0..n)
+        .map(|i| Leg {
+            task: run[if backwards {
+                (first + n - i) % n
+            } else {
+                (first + i) % n
+            }],
+            reversed: backwards,
+            start_vertex: 0,
+        })
+        .collect()
 }
 
 /// Local search over the tasks (generalised TSP, open tour from an entry): the problem is built once per
@@ -613,6 +701,35 @@ mod tests {
         }
         assert!((r.cost - (16.0 + 13.6 + steps)).abs() < 1e-9, "cost {}", r.cost);
         assert!(r.cost < 30.2 + 1e-9, "cost {}", r.cost);
+    }
+
+    #[test]
+    fn chained_pieces_are_driven_round_from_the_piece_nearest_the_entry() {
+        // A 4 m square loop cut into 8 open pieces whose ends meet, and a short pass off its far side.
+        let square = square(0.0, 4.0, 2).points;
+        let mut tasks: Vec<Task> = square
+            .windows(2)
+            .map(|w| Task {
+                points: w.to_vec(),
+                kind: TaskKind::Ring,
+            })
+            .collect();
+        tasks.push(Task {
+            points: vec![Point2::new(4.0, 2.5), Point2::new(3.5, 2.5)],
+            kind: TaskKind::Boundary,
+        });
+        assert_eq!(chained_runs(&tasks), vec![(0..8).collect::<Vec<_>>()]);
+        let entry = Point2::new(2.1, -0.1);
+        let r = route_sweep(&tasks, 0.0, entry);
+        // Round the loop once from the piece starting at (2, 0), the pass inserted where it costs least.
+        let pieces: Vec<usize> = r.legs.iter().map(|l| l.task).filter(|&k| k < 8).collect();
+        assert_eq!(pieces, vec![1, 2, 3, 4, 5, 6, 7, 0]);
+        assert!(r.legs.iter().all(|l| l.task == 8 || !l.reversed));
+        let pass = r.legs.iter().position(|l| l.task == 8).expect("pass driven");
+        assert_eq!(r.legs[pass - 1].task, 2, "pass after the piece ending at (4, 2)");
+        // 16 m of loop, the pass (0.5 m) with its steps out (0.5 m) and back (0.71 m), 0.14 m from the entry.
+        let want = 16.0 + 0.5 + 0.5 + 0.5 * 2f64.sqrt() + 0.1 * 2f64.sqrt();
+        assert!((r.cost - want).abs() < 1e-9, "cost {} vs {want}", r.cost);
     }
 
     #[test]

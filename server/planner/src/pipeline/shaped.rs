@@ -1,0 +1,164 @@
+//! Plans whose speeds follow an attribute map (RFICP): the strategy is chosen by what the robot will do.
+//!
+//! The portfolio ranks strategies by estimated overlap, which is right when the robot drives at one speed.
+//! With an attribute map the dwell uniformity matters too, and it depends on the path's shape in ways the
+//! estimate cannot see: every sharp corner is a slow-down the attribute did not ask for. So the best few
+//! strategies that meet the coverage bar and keep overlap within [`OVERLAP_BAR_PCT`] are linked and
+//! profiled in rank order: the first whose dwell reaches [`DWELL_GOAL_RATIO`] wins (the least overlap among
+//! those that do); when none does, the most uniform dwell relative to constant speed. Region-ready calls are held back until the winner is known
+//! and then replayed for it alone, so what a client was told is always the final plan.
+
+use crate::error::{PlannerError, Result};
+use crate::geom::Point2;
+use crate::space::CoverageSpace;
+use crate::speed::attribute::AttributeMap;
+use crate::speed::{SpeedParams, SpeedProfile, profile_path};
+
+use super::assemble::assemble;
+use super::portfolio::{coverage_bar, prepare_ranked};
+use super::{OVERLAP_BAR_PCT, PlanMonitor, PlanOutput, PlanParams, RegionSummary, plan};
+
+/// At most this many strategies are linked and profiled.
+pub const SHAPED_CANDIDATES: usize = 3;
+
+/// The speed profile's goal: a dwell CV at most this share of the same path's at constant speed (RFICP
+/// halves the spread of coverage against the attribute's demand).
+pub const DWELL_GOAL_RATIO: f64 = 0.5;
+
+/// Plans `space` (see [`plan`]) and profiles the result with `attribute` and `speed`. Without an attribute
+/// map this is [`plan`] followed by [`profile_path`]; with one, see the module docs.
+pub fn plan_shaped(
+    space: &CoverageSpace,
+    params: &PlanParams,
+    attribute: Option<&AttributeMap>,
+    speed: &SpeedParams,
+    monitor: &mut dyn PlanMonitor,
+) -> Result<(PlanOutput, SpeedProfile)> {
+    let Some(attr) = attribute else {
+        let out = plan(space, params, monitor)?;
+        let profile = profile_path(space, &out.waypoints, None, speed)?;
+        return Ok((out, profile));
+    };
+    let target = coverage_bar(params);
+    let ranked = prepare_ranked(space, params, monitor)?;
+    let first_ok = ranked
+        .first()
+        .is_some_and(|p| economical(p.estimate.coverage_pct, p.estimate.overlap_pct, target));
+    let picked: Vec<_> = ranked
+        .into_iter()
+        .enumerate()
+        .filter(|(k, p)| *k == 0 || (first_ok && economical(p.estimate.coverage_pct, p.estimate.overlap_pct, target)))
+        .map(|(_, p)| p)
+        .take(SHAPED_CANDIDATES)
+        .collect();
+    let count = picked.len().max(1);
+    // (dwell ratio, plan, profile, held region calls) of the best candidate so far.
+    let mut best: Option<(f64, PlanOutput, SpeedProfile, Vec<Announced>)> = None;
+    for (k, prepared) in picked.into_iter().enumerate() {
+        let mut held = Held {
+            outer: &*monitor,
+            regions: Vec::new(),
+        };
+        let out = assemble(space, prepared, &mut held)?;
+        let regions = held.regions;
+        let profile = profile_path(space, &out.waypoints, Some(attr), speed)?;
+        monitor.progress(0.75 + 0.25 * (k + 1) as f64 / count as f64);
+        if monitor.cancelled() {
+            return Err(PlannerError::Cancelled);
+        }
+        let m = &profile.metrics;
+        let ok = m.collisions == 0 && economical(m.coverage_pct, m.overlap_pct, target);
+        let d = &profile.dwell;
+        let ratio = if d.dwell_cv_const_speed > 0.0 {
+            d.dwell_cv / d.dwell_cv_const_speed
+        } else {
+            0.0
+        };
+        let wins = match &best {
+            None => true,
+            Some((b, ..)) => ok && ratio + 1e-9 < *b,
+        };
+        if wins {
+            best = Some((ratio, out, profile, regions));
+        }
+        // Candidates come least overlap first: the first that reaches the goal is the one.
+        if best.as_ref().is_some_and(|b| b.0 <= DWELL_GOAL_RATIO) {
+            break;
+        }
+    }
+    let (_, out, profile, regions) = best.ok_or(PlannerError::Cancelled)?;
+    for (summary, path) in &regions {
+        monitor.region_ready(summary, path);
+    }
+    Ok((out, profile))
+}
+
+/// Meets the coverage bar with overlap within [`OVERLAP_BAR_PCT`].
+fn economical(coverage_pct: f64, overlap_pct: f64, target_pct: f64) -> bool {
+    coverage_pct + 1e-9 >= target_pct && overlap_pct <= OVERLAP_BAR_PCT
+}
+
+/// A region-ready call: the region and its path.
+type Announced = (RegionSummary, Vec<Point2>);
+
+/// A monitor that passes cancellation through and holds region-ready calls back.
+struct Held<'a> {
+    outer: &'a dyn PlanMonitor,
+    regions: Vec<Announced>,
+}
+
+impl PlanMonitor for Held<'_> {
+    fn cancelled(&self) -> bool {
+        self.outer.cancelled()
+    }
+
+    fn region_ready(&mut self, region: &RegionSummary, path: &[Point2]) {
+        self.regions.push((region.clone(), path.to_vec()));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::decompose::tests::random_space;
+    use crate::pipeline::NoMonitor;
+    use crate::speed::SpeedLimits;
+
+    /// Records which regions were announced.
+    #[derive(Default)]
+    struct Announcements(Vec<u32>);
+
+    impl PlanMonitor for Announcements {
+        fn region_ready(&mut self, region: &RegionSummary, _path: &[Point2]) {
+            self.0.push(region.id);
+        }
+    }
+
+    #[test]
+    fn the_chosen_plan_is_the_one_announced_and_profiled() {
+        let space = random_space(5, 70, 50, 6).expect("space");
+        let g = *space.geometry();
+        // Dirt rising from left to right.
+        let values: Vec<f64> = (0..g.len())
+            .map(|i| 0.1 + 0.9 * g.cell(i).x as f64 / g.width as f64)
+            .collect();
+        let attr = AttributeMap::from_values(g, values).expect("attribute");
+        let speed = SpeedParams::new(SpeedLimits::default(), space.robot.tool_width_m);
+        let params = PlanParams::default();
+        let mut heard = Announcements::default();
+        let (out, profile) = plan_shaped(&space, &params, Some(&attr), &speed, &mut heard).expect("plan");
+        let ids: Vec<u32> = out.regions.iter().map(|r| r.id).collect();
+        assert_eq!(heard.0, ids, "announced once, in visiting order, for the plan returned");
+        let again = profile_path(&space, &out.waypoints, Some(&attr), &speed).expect("profile");
+        assert_eq!(profile.dwell, again.dwell);
+        assert_eq!(profile.metrics, again.metrics);
+        let m = &profile.metrics;
+        assert!(m.collisions == 0 && m.coverage_pct >= 99.0, "{m:?}");
+        // Without an attribute map it is the plain plan.
+        let (plain, _) = plan_shaped(&space, &params, None, &speed, &mut NoMonitor).expect("plan");
+        assert_eq!(
+            plain.points(),
+            plan(&space, &params, &mut NoMonitor).expect("plan").points()
+        );
+    }
+}
