@@ -88,7 +88,8 @@ pub fn splice_rings(space: &CoverageSpace, tasks: Vec<Task>) -> Vec<Task> {
     out
 }
 
-/// The splices of a spanning forest of the rings, cheapest first.
+/// The splices of a spanning forest of the rings, cheapest first: per ring segment and other ring, the
+/// cheapest way across.
 fn choose(space: &CoverageSpace, verts: &[&[Point2]], reach: f64) -> Vec<Splice> {
     let bucket = reach.max(1e-6);
     let key = |p: Point2| ((p.x / bucket).floor() as i64, (p.y / bucket).floor() as i64);
@@ -120,9 +121,6 @@ fn choose(space: &CoverageSpace, verts: &[&[Point2]], reach: f64) -> Vec<Splice>
                         }
                         let cost = (c - p).norm() + (c2 - q).norm() - (q - p).norm() - (c2 - c).norm();
                         if best.get(&near.ring).is_some_and(|s| s.cost <= cost) {
-                            continue;
-                        }
-                        if !space.segment_ok(p, c) || !space.segment_ok(q, c2) {
                             continue;
                         }
                         best.insert(
@@ -162,6 +160,12 @@ fn choose(space: &CoverageSpace, verts: &[&[Point2]], reach: f64) -> Vec<Splice>
             || used.contains(&(s.a, s.seg))
             || used.contains(&(s.b, b_seg))
         {
+            continue;
+        }
+        // Clearance is checked only for splices the forest would take (most candidates never are).
+        let (va, vb) = (verts[s.a], verts[s.b]);
+        let (p, q) = (va[s.seg], va[(s.seg + 1) % va.len()]);
+        if !space.segment_ok(p, vb[s.b_near_first]) || !space.segment_ok(q, vb[s.b_near_second]) {
             continue;
         }
         union(&mut parent, s.a, s.b);

@@ -3,10 +3,14 @@
 //! The portfolio ranks strategies by estimated overlap, which is right when the robot drives at one speed.
 //! With an attribute map the dwell uniformity matters too, and it depends on the path's shape in ways the
 //! estimate cannot see: every sharp corner is a slow-down the attribute did not ask for. So the best few
-//! strategies that meet the coverage bar and keep overlap within [`OVERLAP_BAR_PCT`] are linked and
+//! strategies that meet the coverage bar and keep overlap within [`super::OVERLAP_BAR_PCT`] are linked and
 //! profiled in rank order: the first whose dwell reaches [`DWELL_GOAL_RATIO`] wins (the least overlap among
-//! those that do); when none does, the most uniform dwell relative to constant speed. Region-ready calls are held back until the winner is known
-//! and then replayed for it alone, so what a client was told is always the final plan.
+//! those that do; the strategies the portfolio holds in reserve on large sites are prepared when none of
+//! the others does); failing that, the most uniform dwell relative to constant speed. Region-ready calls
+//! are held back until the winner is known and then replayed for it alone, so what a client was told is
+//! always the final plan.
+
+use std::collections::VecDeque;
 
 use crate::error::{PlannerError, Result};
 use crate::geom::Point2;
@@ -15,8 +19,9 @@ use crate::speed::attribute::AttributeMap;
 use crate::speed::{SpeedParams, SpeedProfile, profile_path};
 
 use super::assemble::assemble;
-use super::portfolio::{coverage_bar, prepare_ranked};
-use super::{OVERLAP_BAR_PCT, PlanMonitor, PlanOutput, PlanParams, RegionSummary, plan};
+use super::portfolio::{coverage_bar, economical, prepare_ranked};
+use super::prepare::Prepared;
+use super::{PlanMonitor, PlanOutput, PlanParams, RegionSummary, plan};
 
 /// At most this many strategies are linked and profiled.
 pub const SHAPED_CANDIDATES: usize = 3;
@@ -40,21 +45,36 @@ pub fn plan_shaped(
         return Ok((out, profile));
     };
     let target = coverage_bar(params);
-    let ranked = prepare_ranked(space, params, monitor)?;
-    let first_ok = ranked
-        .first()
-        .is_some_and(|p| economical(p.estimate.coverage_pct, p.estimate.overlap_pct, target));
-    let picked: Vec<_> = ranked
-        .into_iter()
-        .enumerate()
-        .filter(|(k, p)| *k == 0 || (first_ok && economical(p.estimate.coverage_pct, p.estimate.overlap_pct, target)))
-        .map(|(_, p)| p)
-        .take(SHAPED_CANDIDATES)
-        .collect();
-    let count = picked.len().max(1);
+    let mut ranked = prepare_ranked(space, params, monitor)?;
+    let worth = |p: &Prepared| economical(p.estimate.coverage_pct, p.estimate.overlap_pct, target);
+    // The first-ranked plan always; others only when they are economical too.
+    let mut queue: VecDeque<Prepared> = VecDeque::new();
+    let mut reserve_asked = false;
+    let first_ok = ranked.prepared.first().is_some_and(worth);
+    for (k, p) in std::mem::take(&mut ranked.prepared).into_iter().enumerate() {
+        if k == 0 || (first_ok && worth(&p)) {
+            queue.push_back(p);
+        }
+    }
     // (dwell ratio, plan, profile, held region calls) of the best candidate so far.
     let mut best: Option<(f64, PlanOutput, SpeedProfile, Vec<Announced>)> = None;
-    for (k, prepared) in picked.into_iter().enumerate() {
+    let mut tried = 0;
+    while tried < SHAPED_CANDIDATES {
+        let Some(prepared) = queue.pop_front() else {
+            // Nothing reached the goal: the strategies held in reserve get their chance.
+            if reserve_asked || !first_ok {
+                break;
+            }
+            reserve_asked = true;
+            queue.extend(
+                ranked
+                    .prepare_reserve(space, params, monitor)?
+                    .into_iter()
+                    .filter(|p| worth(p)),
+            );
+            continue;
+        };
+        tried += 1;
         let mut held = Held {
             outer: &*monitor,
             regions: Vec::new(),
@@ -62,7 +82,7 @@ pub fn plan_shaped(
         let out = assemble(space, prepared, &mut held)?;
         let regions = held.regions;
         let profile = profile_path(space, &out.waypoints, Some(attr), speed)?;
-        monitor.progress(0.75 + 0.25 * (k + 1) as f64 / count as f64);
+        monitor.progress(0.75 + 0.25 * tried as f64 / SHAPED_CANDIDATES as f64);
         if monitor.cancelled() {
             return Err(PlannerError::Cancelled);
         }
@@ -86,16 +106,12 @@ pub fn plan_shaped(
             break;
         }
     }
+    monitor.progress(1.0);
     let (_, out, profile, regions) = best.ok_or(PlannerError::Cancelled)?;
     for (summary, path) in &regions {
         monitor.region_ready(summary, path);
     }
     Ok((out, profile))
-}
-
-/// Meets the coverage bar with overlap within [`OVERLAP_BAR_PCT`].
-fn economical(coverage_pct: f64, overlap_pct: f64, target_pct: f64) -> bool {
-    coverage_pct + 1e-9 >= target_pct && overlap_pct <= OVERLAP_BAR_PCT
 }
 
 /// A region-ready call: the region and its path.
