@@ -158,6 +158,16 @@ pub fn decompose(space: &CoverageSpace, method: DecompositionMethod, params: &De
 pub fn normalize(space: &CoverageSpace, raw: &[u32], min_cells: usize) -> Regions {
     let g = *space.geometry();
     let n = g.len();
+    // The reachable set is one 8-connected component: under a single raw label it is one region as it is.
+    let mut reachable = (0..n).filter(|&i| space.reachable[i]);
+    if let Some(first) = reachable.next()
+        && reachable.all(|i| raw[i] == raw[first])
+    {
+        return Regions {
+            labels: space.reachable.iter().map(|&r| if r { 0 } else { NO_REGION }).collect(),
+            count: 1,
+        };
+    }
     // 1. Connected pieces of equal raw label.
     let mut piece = vec![NO_REGION; n];
     let mut sizes: Vec<usize> = Vec::new();
