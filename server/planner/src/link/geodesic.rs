@@ -66,6 +66,64 @@ pub fn geodesic_distance(space: &CoverageSpace, a: Point2, b: Point2) -> Option<
     super::astar::search(&search, &mut frontier, &roots, &goals).map(|f| f.cost)
 }
 
+/// The cell a point starts from: its own, or — for a point on a cell edge or corner, which the floor puts in
+/// an unreachable cell beside it — the nearest reachable cell around it.
+fn home_cell(space: &CoverageSpace, p: Point2) -> Option<usize> {
+    let geometry = space.geometry();
+    let c = geometry.locate(p)?;
+    let i = geometry.index(c);
+    if space.reachable[i] {
+        return Some(i);
+    }
+    [(1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (-1, 1), (1, -1), (-1, -1)]
+        .into_iter()
+        .filter_map(|(dx, dy)| geometry.offset(c, dx, dy))
+        .map(|n| geometry.index(n))
+        .filter(|&j| space.reachable[j] && space.segment_ok(p, geometry.center_of(j)))
+        .min_by(|&a, &b| {
+            (geometry.center_of(a) - p)
+                .norm()
+                .total_cmp(&(geometry.center_of(b) - p).norm())
+        })
+}
+
+/// Grid distances from one point to every reachable cell: the sweep of [`geodesic_matrix`] with one
+/// seed. For a few distances from one point on a large map (the dock's transits to a single region) it
+/// costs one pass over the grid, which can run while other work is being done.
+#[derive(Debug, Clone)]
+pub struct DistancesFrom {
+    from: Point2,
+    dist: Vec<f64>,
+}
+
+impl DistancesFrom {
+    /// The distances from `from` (a point on the reachable set; from nowhere, everything is unreachable).
+    pub fn new(space: &CoverageSpace, from: Point2) -> Self {
+        let graph = Graph::new(space);
+        let g = space.geometry();
+        let seeds: Vec<(usize, f64, u32)> = home_cell(space, from)
+            .map(|i| (i, (g.center_of(i) - from).norm(), 0))
+            .into_iter()
+            .collect();
+        Self {
+            from,
+            dist: sweep(&graph, &seeds).iter().map(|c| c.dist).collect(),
+        }
+    }
+
+    /// The grid distance to `p` (as [`geodesic_distance`] measures it); `None` when `p` is not on a
+    /// reachable cell connected to the start point.
+    pub fn to(&self, space: &CoverageSpace, p: Point2) -> Option<f64> {
+        let g = space.geometry();
+        let i = home_cell(space, p)?;
+        if g.locate(self.from).is_some_and(|c| g.index(c) == i) {
+            return Some((p - self.from).norm());
+        }
+        let d = self.dist.get(i).copied()?;
+        d.is_finite().then(|| d + (g.center_of(i) - p).norm())
+    }
+}
+
 /// Sweep state of one cell (kept together: one cache line per touched cell).
 #[derive(Debug, Clone, Copy)]
 struct SweepCell {
@@ -393,28 +451,7 @@ pub fn geodesic_matrix(space: &CoverageSpace, points: &[Point2]) -> Vec<f64> {
     let res = graph.resolution;
 
     // Each point's cell, when valid; the point of each cell nearest its centre owns it (the "winner").
-    let home: Vec<Option<usize>> = points
-        .iter()
-        .map(|&p| {
-            // The point's own cell, or — for a point on a cell edge or corner, which the floor puts in an
-            // unreachable cell beside it — the nearest reachable cell around it.
-            let c = geometry.locate(p)?;
-            let i = geometry.index(c);
-            if space.reachable[i] {
-                return Some(i);
-            }
-            [(1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (-1, 1), (1, -1), (-1, -1)]
-                .into_iter()
-                .filter_map(|(dx, dy)| geometry.offset(c, dx, dy))
-                .map(|n| geometry.index(n))
-                .filter(|&j| space.reachable[j] && space.segment_ok(p, geometry.center_of(j)))
-                .min_by(|&a, &b| {
-                    (geometry.center_of(a) - p)
-                        .norm()
-                        .total_cmp(&(geometry.center_of(b) - p).norm())
-                })
-        })
-        .collect();
+    let home: Vec<Option<usize>> = points.iter().map(|&p| home_cell(space, p)).collect();
     let seeds: Vec<(usize, f64, u32)> = home
         .iter()
         .enumerate()
@@ -674,6 +711,24 @@ mod tests {
                             None => prop_assert!(v.is_infinite()),
                         }
                     }
+                }
+            }
+        }
+
+        /// Distances from one point over the whole grid equal the per-pair search.
+        #[test]
+        fn distances_from_one_point_match_per_pair_search(
+            seed in any::<u64>(), w in 16usize..60, h in 16usize..60, obstacles in 0usize..16,
+            radius in 0.08f64..0.22, npts in 2usize..12,
+        ) {
+            let Some(s) = random_space(seed, w, h, obstacles, radius) else { return Ok(()) };
+            let mut rng = Rng::new(seed ^ 0x55);
+            let pts = random_points(&s, &mut rng, npts);
+            let from = DistancesFrom::new(&s, pts[0]);
+            for &p in &pts[1..] {
+                match (from.to(&s, p), geodesic_distance(&s, pts[0], p)) {
+                    (Some(d), Some(exact)) => prop_assert!((d - exact).abs() < 1e-9, "{} vs {}", d, exact),
+                    (d, exact) => prop_assert_eq!(d, exact),
                 }
             }
         }

@@ -35,7 +35,7 @@ use crate::error::{PlannerError, Result};
 use crate::geom::Point2;
 use crate::space::{CoverageSpace, RobotShape};
 
-pub use geodesic::{geodesic_distance, geodesic_matrix};
+pub use geodesic::{DistancesFrom, geodesic_distance, geodesic_matrix};
 pub use shortcut::{path_min_clearance, segment_min_clearance, shortcut};
 
 use astar::{Frontier, Graph, Search};

@@ -7,11 +7,12 @@
 //! attribute map, the best few are linked and the profiled dwell decides among them ([`super::shaped`]).
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::{Arc, mpsc};
+use std::sync::{Arc, OnceLock, mpsc};
 use std::time::Duration;
 
 use crate::decompose::DecompositionMethod;
 use crate::error::{PlannerError, Result};
+use crate::link::DistancesFrom;
 use crate::pattern::PatternMethod;
 use crate::pattern::lanes::{LaneParams, Placement};
 use crate::space::CoverageSpace;
@@ -119,35 +120,45 @@ fn prepare_members(
         t => t,
     }
     .clamp(1, n.max(1));
-    let nearest = nearest_reachable(space);
-    // One basis per distinct decomposition, in first-use order.
-    let mut kinds: Vec<DecompositionMethod> = Vec::new();
-    for m in members {
-        if !kinds.contains(&m.decomposition) {
-            kinds.push(m.decomposition);
+    // The dock's distances over the whole grid, for a strategy with a single region (its only transits),
+    // computed on a spare core while the strategies lay out their patterns.
+    let dock = OnceLock::new();
+    let single = members.iter().any(|m| m.decomposition == DecompositionMethod::Single);
+    let prepared = std::thread::scope(|scope| {
+        if single {
+            scope.spawn(|| dock.get_or_init(|| DistancesFrom::new(space, space.start)));
         }
-    }
-    let cancel = AtomicBool::new(false);
-    let bases: Vec<Option<Arc<Basis>>> = run_parallel(threads, kinds.len(), monitor, &cancel, (0.0, 0.1), |k| {
-        let member = members.iter().find(|m| m.decomposition == kinds[k])?;
-        (!cancel.load(Ordering::Relaxed)).then(|| Arc::new(Basis::new(space, member, &nearest)))
-    })
-    .into_iter()
-    .map(Option::flatten)
-    .collect();
-    let basis_of = |m: &PlanParams| {
-        kinds
-            .iter()
-            .position(|&d| d == m.decomposition)
-            .and_then(|k| bases[k].clone())
-    };
-    let prepared = run_parallel(threads, n, monitor, &cancel, (0.1, PREPARE_SHARE), |k| {
-        let basis = basis_of(&members[k]).ok_or(PlannerError::Cancelled)?;
-        prepare(space, &members[k], (basis, &nearest), &mut Relay(&cancel))
-    });
-    if monitor.cancelled() || cancel.load(Ordering::Relaxed) {
-        return Err(PlannerError::Cancelled);
-    }
+        let nearest = nearest_reachable(space);
+        // One basis per distinct decomposition, in first-use order.
+        let mut kinds: Vec<DecompositionMethod> = Vec::new();
+        for m in members {
+            if !kinds.contains(&m.decomposition) {
+                kinds.push(m.decomposition);
+            }
+        }
+        let cancel = AtomicBool::new(false);
+        let bases: Vec<Option<Arc<Basis>>> = run_parallel(threads, kinds.len(), monitor, &cancel, (0.0, 0.1), |k| {
+            let member = members.iter().find(|m| m.decomposition == kinds[k])?;
+            (!cancel.load(Ordering::Relaxed)).then(|| Arc::new(Basis::new(space, member, &nearest)))
+        })
+        .into_iter()
+        .map(Option::flatten)
+        .collect();
+        let basis_of = |m: &PlanParams| {
+            kinds
+                .iter()
+                .position(|&d| d == m.decomposition)
+                .and_then(|k| bases[k].clone())
+        };
+        let prepared = run_parallel(threads, n, monitor, &cancel, (0.1, PREPARE_SHARE), |k| {
+            let basis = basis_of(&members[k]).ok_or(PlannerError::Cancelled)?;
+            prepare(space, &members[k], (basis, &nearest, &dock), &mut Relay(&cancel))
+        });
+        if monitor.cancelled() || cancel.load(Ordering::Relaxed) {
+            return Err(PlannerError::Cancelled);
+        }
+        Ok(prepared)
+    })?;
     prepared
         .into_iter()
         .map(|p| p.ok_or(PlannerError::Cancelled)?)

@@ -8,7 +8,7 @@ use std::sync::{Arc, OnceLock};
 use crate::decompose::{DecomposeParams, NO_REGION, Regions, decompose};
 use crate::error::{PlannerError, Result};
 use crate::geom::{Point2, pair_key, polyline_length};
-use crate::link::{LinkParams, Linker, geodesic_matrix};
+use crate::link::{DistancesFrom, LinkParams, Linker, geodesic_matrix};
 use crate::map::DistanceField;
 use crate::metrics::{CoverageRaster, coverage_of};
 use crate::order::{DistanceMatrix, SolveBudget, Tour, TourOption, TourProblem};
@@ -164,7 +164,7 @@ impl Basis {
 pub fn prepare(
     space: &CoverageSpace,
     params: &PlanParams,
-    (basis, nearest_reachable): (Arc<Basis>, &DistanceField),
+    (basis, nearest_reachable, dock): (Arc<Basis>, &DistanceField, &OnceLock<DistancesFrom>),
     monitor: &mut dyn PlanMonitor,
 ) -> Result<Prepared> {
     let check = |m: &dyn PlanMonitor| {
@@ -254,7 +254,7 @@ pub fn prepare(
     }
     check(monitor)?;
     monitor.progress(0.6);
-    let (mut active, mut tour) = visit_order(space, params, &options, monitor);
+    let (mut active, mut tour) = visit_order(space, params, &options, dock, monitor);
     check(monitor)?;
     // The raster holds the steps of each region's first route; the tour may drive others, whose steps along
     // the walls cover other nooks. What the driven routes leave below the coverage target gets more passes
@@ -278,7 +278,7 @@ pub fn prepare(
             break;
         }
         reroute(&mut options, &tasks, redo, monitor);
-        (active, tour) = visit_order(space, params, &options, monitor);
+        (active, tour) = visit_order(space, params, &options, dock, monitor);
         check(monitor)?;
         driven = driven_raster(walls, (&tasks, &options), (&active, &tour));
         estimate = estimate_of(space, &driven, tour.cost);
@@ -351,6 +351,7 @@ fn visit_order(
     space: &CoverageSpace,
     params: &PlanParams,
     options: &[Vec<RegionRoute>],
+    dock: &OnceLock<DistancesFrom>,
     monitor: &dyn PlanMonitor,
 ) -> (Vec<usize>, Tour) {
     let active: Vec<usize> = (0..options.len()).filter(|&id| !options[id].is_empty()).collect();
@@ -374,9 +375,25 @@ fn visit_order(
         }
         nodes.push(node);
     }
-    let geo = geodesic_matrix(space, &points);
     let n = points.len();
-    let dist = DistanceMatrix::from_fn(n, |i, j| geo[i * n + j]);
+    let dist = if active.len() == 1 {
+        // One region: only the transits from and back to the dock count (straight distances between the
+        // region's own ends are never used), read off the dock's distances — computed once per plan, on a
+        // spare core while the patterns were being laid out.
+        let from_dock = dock.get_or_init(|| DistancesFrom::new(space, space.start));
+        let d: Vec<f64> = points
+            .iter()
+            .map(|&p| from_dock.to(space, p).unwrap_or(f64::INFINITY))
+            .collect();
+        DistanceMatrix::from_fn(n, |i, j| match (i, j) {
+            _ if i == j => 0.0,
+            (0, k) | (k, 0) => d[k],
+            _ => (points[i] - points[j]).norm(),
+        })
+    } else {
+        let geo = geodesic_matrix(space, &points);
+        DistanceMatrix::from_fn(n, |i, j| geo[i * n + j])
+    };
     let problem = TourProblem {
         dist,
         depot: 0,
@@ -558,7 +575,7 @@ mod tests {
             };
             let near = nearest_reachable(&space);
             let basis = Arc::new(Basis::new(&space, &params, &near));
-            let prepared = prepare(&space, &params, (basis, &near), &mut NoMonitor).expect("prepare");
+            let prepared = prepare(&space, &params, (basis, &near, &OnceLock::new()), &mut NoMonitor).expect("prepare");
             let e = prepared.estimate;
             // The steps the tour drives (straight, along walls, linked round obstacles) are in the estimate:
             // passes were added until they cover the target (within the top-up tolerance).
