@@ -22,6 +22,9 @@ pub struct DistanceField {
     feature: Vec<u32>,
 }
 
+/// Grids of at least this many cells compute the row pass of the transform on two threads.
+const PARALLEL_CELLS: usize = 250_000;
+
 impl DistanceField {
     /// Computes the transform. `is_site(i)` tells whether cell `i` is a site; `border_is_site` adds the ring of
     /// cells around the map as sites.
@@ -64,27 +67,39 @@ impl DistanceField {
                 }
             }
         }
-        // Pass 2: along each row, lower envelope of parabolas.
+        // Pass 2: along each row, lower envelope of parabolas. Rows are independent: large grids split them
+        // between two threads.
         let mut dist_m = vec![f32::INFINITY; w * h];
         let mut feature = vec![u32::MAX; w * h];
-        let mut f = vec![0.0; pw];
-        let mut d = vec![0.0; pw];
-        let mut arg = vec![0usize; pw];
-        let mut v = vec![0usize; pw];
-        let mut z = vec![0.0; pw + 1];
-        for y in pad..h + pad {
-            for x in 0..pw {
-                f[x] = g[y * pw + x];
-            }
-            lower_envelope(&f, &mut d, &mut arg, &mut v, &mut z);
-            for x in pad..w + pad {
-                let i = (y - pad) * w + (x - pad);
-                if d[x] < INF * 0.5 {
-                    let fx = arg[x];
-                    dist_m[i] = (d[x].sqrt() * geometry.resolution) as f32;
-                    feature[i] = (gy[y * pw + fx] as usize * pw + fx) as u32;
+        let rows = |first: usize, dist_m: &mut [f32], feature: &mut [u32]| {
+            let mut f = vec![0.0; pw];
+            let mut d = vec![0.0; pw];
+            let mut arg = vec![0usize; pw];
+            let mut v = vec![0usize; pw];
+            let mut z = vec![0.0; pw + 1];
+            for (r, (dist_row, feature_row)) in dist_m.chunks_mut(w).zip(feature.chunks_mut(w)).enumerate() {
+                let y = first + r + pad;
+                f.copy_from_slice(&g[y * pw..(y + 1) * pw]);
+                lower_envelope(&f, &mut d, &mut arg, &mut v, &mut z);
+                for x in 0..w {
+                    if d[x + pad] < INF * 0.5 {
+                        let fx = arg[x + pad];
+                        dist_row[x] = (d[x + pad].sqrt() * geometry.resolution) as f32;
+                        feature_row[x] = (gy[y * pw + fx] as usize * pw + fx) as u32;
+                    }
                 }
             }
+        };
+        if w * h >= PARALLEL_CELLS && h >= 2 {
+            let half = h / 2;
+            let (dist_a, dist_b) = dist_m.split_at_mut(half * w);
+            let (feature_a, feature_b) = feature.split_at_mut(half * w);
+            std::thread::scope(|scope| {
+                scope.spawn(|| rows(half, dist_b, feature_b));
+                rows(0, dist_a, feature_a);
+            });
+        } else {
+            rows(0, &mut dist_m, &mut feature);
         }
         Self {
             geometry,
@@ -257,6 +272,35 @@ mod tests {
                     .fold(f64::INFINITY, f64::min)
             })
             .collect()
+    }
+
+    #[test]
+    fn grids_split_between_threads_match_brute_force() {
+        let (w, h) = (520, 490);
+        assert!(w * h >= PARALLEL_CELLS);
+        let geometry = GridGeometry::new(w, h, 0.1, Point2::origin()).expect("valid");
+        let mut state = 0x2545_F491_4F6C_DD1D_u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let sites: Vec<usize> = (0..40).map(|_| (next() % (w * h) as u64) as usize).collect();
+        let df = DistanceField::compute(geometry, |i| sites.contains(&i), false);
+        // Cells all over, and every cell of the rows either side of the split.
+        let mut probe: Vec<usize> = (0..500).map(|_| (next() % (w * h) as u64) as usize).collect();
+        probe.extend((h / 2 - 1) * w..(h / 2 + 1) * w);
+        for i in probe {
+            let c = geometry.center_of(i);
+            let want = sites
+                .iter()
+                .map(|&s| (geometry.center_of(s) - c).norm())
+                .fold(f64::INFINITY, f64::min);
+            assert!((df.at(i) - want).abs() < 1e-4, "cell {i}: {} vs {want}", df.at(i));
+            let s = df.nearest_site(i).expect("site");
+            assert!(((s - c).norm() - want).abs() < 1e-4);
+        }
     }
 
     proptest! {
