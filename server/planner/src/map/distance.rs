@@ -38,31 +38,39 @@ impl DistanceField {
             }
             is_site((py - pad) * w + (px - pad))
         };
-        // Pass 1: along each padded column, squared distance to the nearest site row and that row.
+        // Pass 1: along each padded column, squared distance to the nearest site row and that row. Swept
+        // row by row (every column at once) so that memory is read in order: the nearest site at or above,
+        // then at or below.
         let mut g = vec![INF; pw * ph];
         let mut gy = vec![u32::MAX; pw * ph];
-        for x in 0..pw {
-            let mut last: Option<usize> = None;
-            for y in 0..ph {
+        let mut sites = vec![false; pw * ph];
+        let mut last = vec![u32::MAX; pw];
+        for y in 0..ph {
+            for (x, l) in last.iter_mut().enumerate() {
+                let i = y * pw + x;
                 if site(x, y) {
-                    last = Some(y);
+                    sites[i] = true;
+                    *l = y as u32;
                 }
-                if let Some(s) = last {
-                    let d = (y - s) as f64;
-                    g[y * pw + x] = d * d;
-                    gy[y * pw + x] = s as u32;
+                if *l != u32::MAX {
+                    let d = (y - *l as usize) as f64;
+                    g[i] = d * d;
+                    gy[i] = *l;
                 }
             }
-            let mut next: Option<usize> = None;
-            for y in (0..ph).rev() {
-                if site(x, y) {
-                    next = Some(y);
+        }
+        let mut next = vec![u32::MAX; pw];
+        for y in (0..ph).rev() {
+            for (x, s) in next.iter_mut().enumerate() {
+                let i = y * pw + x;
+                if sites[i] {
+                    *s = y as u32;
                 }
-                if let Some(s) = next {
-                    let d = (s - y) as f64;
-                    if d * d < g[y * pw + x] {
-                        g[y * pw + x] = d * d;
-                        gy[y * pw + x] = s as u32;
+                if *s != u32::MAX {
+                    let d = (*s as usize - y) as f64;
+                    if d * d < g[i] {
+                        g[i] = d * d;
+                        gy[i] = *s;
                     }
                 }
             }
