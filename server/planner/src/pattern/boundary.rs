@@ -16,7 +16,6 @@
 
 use std::collections::BinaryHeap;
 
-use super::contour::trace_cells;
 use super::excursion::{Excursion, Hosts};
 use super::lanes::RegionView;
 use super::{Task, TaskKind};
@@ -74,7 +73,7 @@ impl Default for PassParams {
 /// the reachable cells.
 pub fn candidates(
     space: &CoverageSpace,
-    region: RegionView<'_>,
+    (region, contours): (RegionView<'_>, &[Vec<usize>]),
     (raster, hosts): (&CoverageRaster, &Hosts),
     nearest_reachable: &DistanceField,
     params: &PassParams,
@@ -107,7 +106,7 @@ pub fn candidates(
     let extend = rc.max(1) as usize;
     let merge_gap = (2 * rc).max(2) as usize;
     let max_len = ((params.max_stretch_widths * 2.0 * half) / res).ceil().max(4.0) as usize;
-    for lp in trace_cells(&g, region.cells) {
+    for lp in contours {
         let n = lp.len();
         if n < 2 {
             continue;

@@ -6,7 +6,6 @@ use crate::geom::{Point2, simplify_polyline};
 use crate::link::{LinkParams, Linker};
 use crate::metrics::evaluate;
 use crate::pattern::PatternMethod;
-use crate::pattern::contour::trace_cells;
 use crate::space::CoverageSpace;
 
 use super::prepare::Prepared;
@@ -67,7 +66,7 @@ pub fn assemble(space: &CoverageSpace, prepared: Prepared, monitor: &mut dyn Pla
                 }
             }
         }
-        let s = summary(space, &basis.cells[id], id, angles[id]);
+        let s = summary(space, (&basis.cells[id], &basis.contours[id]), id, angles[id]);
         let region_path: Vec<Point2> = path.waypoints[first..].iter().map(|w| w.position).collect();
         monitor.region_ready(&s, &region_path);
         summaries.push(s);
@@ -185,10 +184,15 @@ impl Path {
     }
 }
 
-fn summary(space: &CoverageSpace, cells: &[usize], id: usize, angle: f64) -> RegionSummary {
+fn summary(
+    space: &CoverageSpace,
+    (cells, contours): (&[usize], &[Vec<usize>]),
+    id: usize,
+    angle: f64,
+) -> RegionSummary {
     let g = space.geometry();
     let area_m2 = cells.len() as f64 * g.resolution * g.resolution;
-    let outer = trace_cells(g, cells).into_iter().next().unwrap_or_default();
+    let outer = contours.first().cloned().unwrap_or_default();
     let pts: Vec<Point2> = outer.iter().map(|&i| g.center_of(i)).collect();
     let polygon = simplify_polyline(&pts, g.resolution, &|_, _| true);
     RegionSummary {

@@ -13,6 +13,7 @@ use crate::map::DistanceField;
 use crate::metrics::{CoverageRaster, coverage_of};
 use crate::order::{DistanceMatrix, SolveBudget, Tour, TourOption, TourProblem};
 use crate::pattern::boundary::{candidates, select};
+use crate::pattern::contour::trace_cells;
 use crate::pattern::excursion::{Hosts, splice};
 use crate::pattern::frame::frame_tasks;
 use crate::pattern::lanes::{LaneParams, Placement, RegionView, best_angle, plan_lanes};
@@ -89,6 +90,9 @@ pub struct Basis {
     pub cells: Vec<Vec<usize>>,
     /// Cover targets of every region.
     pub targets: Vec<Vec<usize>>,
+    /// Boundary loops of every region (traced once; the wall steps, the targeted passes and the region
+    /// outlines all start from them).
+    pub contours: Vec<Vec<Vec<usize>>>,
     /// The regions' contours, for steps between lane ends that follow a wall.
     pub wall_steps: WallSteps,
     /// Sweep direction of every region (the same for every lane placement), computed by the first strategy
@@ -122,12 +126,14 @@ impl Basis {
                 targets[l as usize].push(i);
             }
         }
-        let wall_steps = WallSteps::new(space, &cells);
+        let contours: Vec<Vec<Vec<usize>>> = cells.iter().map(|c| trace_cells(g, c)).collect();
+        let wall_steps = WallSteps::new(space, &contours);
         Self {
             regions,
             target_labels,
             cells,
             targets,
+            contours,
             wall_steps,
             lane_angles: OnceLock::new(),
         }
@@ -323,7 +329,7 @@ fn add_passes(
         let hosts = Hosts::new(space, region_tasks);
         pool.extend(candidates(
             space,
-            basis.view(id),
+            (basis.view(id), &basis.contours[id]),
             (raster, &hosts),
             nearest_reachable,
             &params.passes,

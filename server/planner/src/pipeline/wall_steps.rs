@@ -10,7 +10,6 @@
 use std::collections::HashMap;
 
 use crate::geom::{Point2, polyline_length, simplify_polyline};
-use crate::pattern::contour::trace_cells;
 use crate::space::CoverageSpace;
 
 /// Longest detour (contour length minus straight length) a step takes to follow the contour, tool widths.
@@ -31,12 +30,12 @@ pub struct WallSteps {
 }
 
 impl WallSteps {
-    /// The contours of the regions whose cells are `cells`.
-    pub fn new(space: &CoverageSpace, cells: &[Vec<usize>]) -> Self {
+    /// The regions' contours: per region, its boundary loops as `trace_cells` gives them.
+    pub fn new(space: &CoverageSpace, contours: &[Vec<Vec<usize>>]) -> Self {
         let g = space.geometry();
         let mut out = Self::default();
-        for region in cells {
-            for lp in trace_cells(g, region) {
+        for region in contours {
+            for lp in region.iter().cloned() {
                 if lp.len() < 3 {
                     continue;
                 }
@@ -125,6 +124,7 @@ impl WallSteps {
 mod tests {
     use super::*;
     use crate::map::{CellState, GridGeometry, OccupancyGrid};
+    use crate::pattern::contour::trace_cells;
     use crate::space::RobotShape;
 
     /// 4 m × 3 m at 0.05 m with a nook 0.4 m wide and 0.2 m deep in the bottom wall at x = 2 m.
@@ -145,7 +145,7 @@ mod tests {
         let space = ragged();
         let g = *space.geometry();
         let cells: Vec<usize> = (0..g.len()).filter(|&i| space.reachable[i]).collect();
-        let steps = WallSteps::new(&space, &[cells]);
+        let steps = WallSteps::new(&space, &[trace_cells(&g, &cells)]);
         // Lane ends on the lowest reachable cells of two columns either side of the nook.
         let lowest = |x: f64| {
             (0..g.height)
