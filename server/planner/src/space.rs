@@ -216,14 +216,22 @@ impl CoverageSpace {
             if !self.point_ok(p) {
                 return false;
             }
-            let slack = self.clearance_lower_bound(p) - margin;
-            k += if spacing > 0.0 && slack > spacing {
-                (slack / spacing).floor() as usize
-            } else {
-                1
-            };
+            k += self.samples_clear_ahead(p, margin, spacing);
         }
         true
+    }
+
+    /// How many samples `spacing` apart to advance from `p` along a line: all those within the clearance
+    /// that `p` has beyond `needed` (their clearance is at least `needed` minus what that leaves, since
+    /// clearance changes by at most the distance moved), and at least one.
+    #[inline]
+    pub fn samples_clear_ahead(&self, p: Point2, needed: f64, spacing: f64) -> usize {
+        let slack = self.clearance_lower_bound(p) - needed;
+        if spacing > 0.0 && slack > spacing {
+            (slack / spacing).floor() as usize
+        } else {
+            1
+        }
     }
 
     /// Number of reachable cells.

@@ -139,12 +139,7 @@ pub fn count_collisions(space: &CoverageSpace, path: &[Point2]) -> usize {
             }
             // Samples within the clearance to spare are clear too (clearance changes by at most the distance
             // moved): leap over them; the count is that of checking every sample.
-            let slack = space.clearance_lower_bound(p) - r;
-            j += if spacing > 0.0 && slack > spacing {
-                (slack / spacing).floor() as usize
-            } else {
-                1
-            };
+            j += space.samples_clear_ahead(p, r, spacing);
         }
     }
     n

@@ -66,7 +66,7 @@ pub fn assemble(space: &CoverageSpace, prepared: Prepared, monitor: &mut dyn Pla
                 }
             }
         }
-        let s = summary(space, (&basis.cells[id], &basis.contours[id]), id, angles[id]);
+        let s = summary(space, (&basis.cells[id], basis.wall_steps.contours(id)), id, angles[id]);
         let region_path: Vec<Point2> = path.waypoints[first..].iter().map(|w| w.position).collect();
         monitor.region_ready(&s, &region_path);
         summaries.push(s);

@@ -45,7 +45,7 @@ pub struct Ranked {
     /// Best first (ties in member order).
     pub prepared: Vec<Prepared>,
     /// Strategies prepared only when those above fall short.
-    pub reserve: Vec<PlanParams>,
+    reserve: Vec<PlanParams>,
 }
 
 impl Ranked {

@@ -90,10 +90,8 @@ pub struct Basis {
     pub cells: Vec<Vec<usize>>,
     /// Cover targets of every region.
     pub targets: Vec<Vec<usize>>,
-    /// Boundary loops of every region (traced once; the wall steps, the targeted passes and the region
-    /// outlines all start from them).
-    pub contours: Vec<Vec<Vec<usize>>>,
-    /// The regions' contours, for steps between lane ends that follow a wall.
+    /// The regions' contours (traced once: the targeted passes and the region outlines read them too), for
+    /// steps between lane ends that follow a wall.
     pub wall_steps: WallSteps,
     /// Sweep direction of every region (the same for every lane placement), computed by the first strategy
     /// with lanes that needs it.
@@ -126,14 +124,12 @@ impl Basis {
                 targets[l as usize].push(i);
             }
         }
-        let contours: Vec<Vec<Vec<usize>>> = cells.iter().map(|c| trace_cells(g, c)).collect();
-        let wall_steps = WallSteps::new(space, &contours);
+        let wall_steps = WallSteps::new(space, cells.iter().map(|c| trace_cells(g, c)).collect());
         Self {
             regions,
             target_labels,
             cells,
             targets,
-            contours,
             wall_steps,
             lane_angles: OnceLock::new(),
         }
@@ -329,7 +325,7 @@ fn add_passes(
         let hosts = Hosts::new(space, region_tasks);
         pool.extend(candidates(
             space,
-            (basis.view(id), &basis.contours[id]),
+            (basis.view(id), basis.wall_steps.contours(id)),
             (raster, &hosts),
             nearest_reachable,
             &params.passes,

@@ -22,20 +22,22 @@ const STRAIGHT_WALL: f64 = 1.1;
 /// The contour loops of every region, with where each contour cell sits on its loop.
 #[derive(Debug, Clone, Default)]
 pub struct WallSteps {
-    /// Per loop: the cells in order and the arc length from the first cell to each (metres), with the
-    /// closing length last.
-    loops: Vec<(Vec<usize>, Vec<f64>)>,
+    /// Per region, its boundary loops (cells in order) as `trace_cells` gives them.
+    contours: Vec<Vec<Vec<usize>>>,
+    /// Per loop of three cells or more: its region, its index there, and the arc length from the first cell
+    /// to each (metres), with the closing length last.
+    loops: Vec<(u32, u32, Vec<f64>)>,
     /// Contour cell → (loop, position): the first time the loop passes the cell.
     at: HashMap<usize, (u32, u32)>,
 }
 
 impl WallSteps {
     /// The regions' contours: per region, its boundary loops as `trace_cells` gives them.
-    pub fn new(space: &CoverageSpace, contours: &[Vec<Vec<usize>>]) -> Self {
+    pub fn new(space: &CoverageSpace, contours: Vec<Vec<Vec<usize>>>) -> Self {
         let g = space.geometry();
         let mut out = Self::default();
-        for region in contours {
-            for lp in region.iter().cloned() {
+        for (r, region) in contours.iter().enumerate() {
+            for (k, lp) in region.iter().enumerate() {
                 if lp.len() < 3 {
                     continue;
                 }
@@ -47,13 +49,19 @@ impl WallSteps {
                     s += (g.center_of(lp[k % lp.len()]) - g.center_of(lp[k - 1])).norm();
                     arc.push(s);
                 }
-                for (k, &c) in lp.iter().enumerate() {
-                    out.at.entry(c).or_insert((id, k as u32));
+                for (pos, &c) in lp.iter().enumerate() {
+                    out.at.entry(c).or_insert((id, pos as u32));
                 }
-                out.loops.push((lp, arc));
+                out.loops.push((r as u32, k as u32, arc));
             }
         }
+        out.contours = contours;
         out
+    }
+
+    /// The boundary loops of region `id` (empty for an unknown region).
+    pub fn contours(&self, id: usize) -> &[Vec<usize>] {
+        self.contours.get(id).map_or(&[], Vec::as_slice)
     }
 
     /// Contour positions within one cell of `p` (nearest first by cell centre).
@@ -85,7 +93,8 @@ impl WallSteps {
         let slack = SLACK_WIDTHS * space.robot.tool_width_m;
         let (pa, pb) = (self.near(space, a), self.near(space, b));
         let (&(la, ia), &(_, ib)) = pa.iter().find_map(|x| pb.iter().find(|y| y.0 == x.0).map(|y| (x, y)))?;
-        let (cells, arc) = &self.loops[la as usize];
+        let (r, k, arc) = &self.loops[la as usize];
+        let cells = &self.contours[*r as usize][*k as usize];
         let total = arc[cells.len()];
         let (i, j) = (ia as usize, ib as usize);
         let forward = if j >= i {
@@ -145,7 +154,7 @@ mod tests {
         let space = ragged();
         let g = *space.geometry();
         let cells: Vec<usize> = (0..g.len()).filter(|&i| space.reachable[i]).collect();
-        let steps = WallSteps::new(&space, &[trace_cells(&g, &cells)]);
+        let steps = WallSteps::new(&space, vec![trace_cells(&g, &cells)]);
         // Lane ends on the lowest reachable cells of two columns either side of the nook.
         let lowest = |x: f64| {
             (0..g.height)
