@@ -21,7 +21,7 @@
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use super::two_opt::{Move, Search, State, WorkQueue, better, local_optimum};
+use super::local_search::{Move, Search, State, WorkQueue, better, local_optimum};
 use super::{BIG, Orderer, SolveBudget, Tour, TourProblem, TwoOptParams, improves};
 
 /// Knobs of simulated annealing.

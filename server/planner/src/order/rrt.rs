@@ -13,9 +13,8 @@
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use super::two_opt::{State, WorkQueue, better, local_optimum};
+use super::local_search::{Search, State, WorkQueue, better, local_optimum};
 use super::{Orderer, SolveBudget, Tour, TourProblem, TwoOptParams, improves};
-use crate::order::two_opt::Search;
 
 /// Knobs of record-to-record travel.
 #[derive(Clone, Copy, Debug, PartialEq)]
