@@ -108,7 +108,7 @@ impl<'p> Inst<'p> {
         self.opts[self.first[node] + o]
     }
 
-    /// Exact (clamped) cost of a tour, metres, in [`tour_cost`]'s summation order.
+    /// Exact (clamped) cost of a tour, metres, in [`tour_cost`](super::tour_cost)'s summation order.
     pub fn eval(&self, order: &[usize], opt: &[usize]) -> f64 {
         let mut acc = 0.0;
         let mut prev = self.depot;

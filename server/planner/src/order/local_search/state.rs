@@ -18,7 +18,7 @@ pub(crate) struct State {
     pub(super) ent: Vec<usize>,
     /// Exit point of `order[k]` with `opt[k]`.
     pub(super) ext: Vec<usize>,
-    /// Tracked cost, metres; exact after [`Search::optimise`].
+    /// Tracked cost, metres; exact after [`Search::optimise`](super::Search::optimise).
     pub cost: f64,
 }
 
