@@ -210,10 +210,47 @@ pub struct PlanStatusResponse {
     /// frame: their cells are missed until a later revisit.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub missed: Vec<Vec<[f64; 2]>>,
+    /// Corrections applied so far (the version minus one once computed).
+    #[serde(default)]
+    pub corrections: u64,
+    /// While a robot drives it: whether its path is watched against fresh obstacle points (`watching`) or the
+    /// site's live map got no points for `zenoh.robot_timeout_s` while the robot is alive (`blind`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub watch: Option<WatchHealth>,
+    /// Where progress was found elsewhere on the path than where the robot was expected (it joined late, was
+    /// carried, relocalised, or went back), the latest last.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub progress_jumps: Vec<ProgressJump>,
     /// When the request was accepted, milliseconds since the Unix epoch.
     pub created_ms: u64,
     /// Last status change, milliseconds since the Unix epoch.
     pub updated_ms: u64,
+}
+
+/// Whether an assigned plan's path is watched against fresh obstacle points.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+#[serde(rename_all = "lowercase")]
+pub enum WatchHealth {
+    /// Points reach the site's live map.
+    Watching,
+    /// No points reached the site's live map for `zenoh.robot_timeout_s` while the robot is alive: new
+    /// obstacles on its path cannot be seen.
+    Blind,
+}
+
+/// Progress found away from where the robot was expected along its plan.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct ProgressJump {
+    /// Metres along the path before.
+    pub from_m: f64,
+    /// Metres along the path after.
+    pub to_m: f64,
+    /// The robot went back over driven ground.
+    pub backwards: bool,
+    /// When, milliseconds since the Unix epoch.
+    pub at_ms: u64,
 }
 
 /// `POST /v1/plans/{id}/assign`.
@@ -264,6 +301,31 @@ pub struct RobotView {
     /// The last correction sent to it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub last_correction: Option<LastCorrection>,
+    /// The site its clouds and scans feed: the site of the plan it drives, else the default site of unassigned
+    /// robots (`zenoh.site`); absent when its points go nowhere.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub site: Option<String>,
+    /// What became of its sensor data (filled by the daemon's ingest).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sensors: Option<RobotSensorsView>,
+}
+
+/// A robot's sensor data as the daemon's ingest saw it.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct RobotSensorsView {
+    /// Clouds and scans placed in a site's live map.
+    pub placed: u64,
+    /// Points in them.
+    pub points: u64,
+    /// Messages waiting for the odometry that places them.
+    pub waiting: usize,
+    /// Messages dropped, by reason (`unrouted`, `malformed`, `no_pose`, `too_old`, `future`, `wait_full`,
+    /// `queue_full`, `no_map`; `frame` for odometry in a frame the daemon cannot place).
+    pub dropped: std::collections::BTreeMap<String, u64>,
+    /// Why the last one was dropped.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub last_drop: Option<String>,
 }
 
 /// The last correction a robot received (`GET /v1/robots/{id}`).

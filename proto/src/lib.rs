@@ -15,8 +15,8 @@ pub mod scene;
 
 pub use api::{
     AssignRequest, ErrorBody, ErrorDetail, LastCorrection, PlanAccepted, PlanEvent, PlanOptions, PlanRequest,
-    PlanStatus, PlanStatusResponse, PoseView, RegionReady, RobotSpec, RobotView, SiteSummary, SpeedProfileResponse,
-    SpeedSample,
+    PlanStatus, PlanStatusResponse, PoseView, ProgressJump, RegionReady, RobotSensorsView, RobotSpec, RobotView,
+    SiteSummary, SpeedProfileResponse, SpeedSample, WatchHealth,
 };
 pub use attribute::{AttributeBlobDoc, AttributeDoc};
 pub use correction::{CorrectionDoc, CorrectionError, CorrectionReason};

@@ -4,7 +4,12 @@
 //! cloud published → correction received (wall clock, one process), and the daemon's own check time
 //! (`compute_us`: judgment + IKD-SWOpt + verification + re-profiling). Prints one JSON line.
 //!
-//! `cargo run --release -p shift-tests --example correction_latency [-- TRIALS]`
+//! Three scenarios, one line each: `default-site` (the hall is `[zenoh] site`, the robot drives from waypoint 0),
+//! `own-site` (no default site: the robot's data reaches the hall only because its plan is there) and
+//! `reacquired` (own site, and before every obstacle the robot jumps ahead along its plan, so its progress is
+//! found again by the whole-plan search each time).
+//!
+//! `cargo run --release -p shift-tests --example correction_latency [-- TRIALS [SCENARIO]]`
 
 use std::time::{Duration, Instant};
 
@@ -55,11 +60,33 @@ fn ahead(w: &[WaypointDoc], i: usize, ahead_m: f64) -> Option<(f64, f64, usize)>
 #[tokio::main(flavor = "multi_thread", worker_threads = 2)]
 async fn main() -> Result<()> {
     let trials: usize = std::env::args().nth(1).and_then(|a| a.parse().ok()).unwrap_or(200);
+    let only = std::env::args().nth(2);
+    for scenario in ["default-site", "own-site", "reacquired"] {
+        if only.as_deref().is_none_or(|o| o == scenario) {
+            run(scenario, trials).await?;
+        }
+    }
+    Ok(())
+}
+
+/// Heading of the path at waypoint `i`, radians.
+fn heading(w: &[WaypointDoc], i: usize) -> f64 {
+    let j = (i + 1).min(w.len() - 1);
+    let i = j.saturating_sub(1);
+    (w[j].y - w[i].y).atan2(w[j].x - w[i].x)
+}
+
+async fn run(scenario: &str, trials: usize) -> Result<()> {
     let dir = tempfile::tempdir()?;
     let endpoint = format!("tcp/127.0.0.1:{}", free_port()?);
     let mut config = test_config(dir.path());
     config.zenoh.listen = vec![endpoint.clone()];
-    config.zenoh.site = "hall".into();
+    config.zenoh.site = if scenario == "default-site" {
+        "hall".into()
+    } else {
+        String::new()
+    };
+    let jump = scenario == "reacquired";
     // Old clusters leave the live map after a while, as they would when robots no longer see them.
     config.zenoh.horizon_s = 30;
     config.demo.enabled = false;
@@ -86,17 +113,20 @@ async fn main() -> Result<()> {
     let mut rng = Rng(0x5eed_1234_abcd_0001);
     let (mut e2e_ms, mut compute_us) = (Vec::new(), Vec::new());
     let (mut at, mut missed, mut by_reason) = (0usize, 0usize, std::collections::BTreeMap::new());
-    let stride = (doc.waypoints.len() / (trials + 1)).max(8);
+    // A jump goes beyond the progress window (200 waypoints): the whole-plan search finds the robot.
+    let stride = (doc.waypoints.len() / (trials + 1)).max(if jump { 250 } else { 8 });
     for _ in 0..trials {
         // Drive on along the current plan (progress follows the robot waypoint by waypoint).
         let target = (at + stride).min(doc.waypoints.len().saturating_sub(2));
-        for k in (at..=target).step_by(3) {
-            let w = doc.waypoints[k];
-            robot.odom("r1", w.x, w.y, 0.0).await?;
+        if !jump {
+            for k in (at..=target).step_by(3) {
+                let w = doc.waypoints[k];
+                robot.odom("r1", w.x, w.y, heading(&doc.waypoints, k)).await?;
+            }
         }
         at = target;
         let w = doc.waypoints[at];
-        robot.odom("r1", w.x, w.y, 0.0).await?;
+        robot.odom("r1", w.x, w.y, heading(&doc.waypoints, at)).await?;
         tokio::time::sleep(Duration::from_millis(20)).await;
         let Some((ox, oy, _)) = ahead(&doc.waypoints, at, 1.5 + rng.unit()) else {
             break;
@@ -148,6 +178,7 @@ async fn main() -> Result<()> {
     println!(
         "{}",
         json!({
+            "scenario": scenario,
             "trials": e2e_ms.len() + missed,
             "corrections": e2e_ms.len(),
             "no_correction_within_2s": missed,

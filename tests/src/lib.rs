@@ -4,6 +4,7 @@
 //! HTTP like a fleet backend would. This library holds the harness; the tests are in `tests/`.
 
 pub mod fleet;
+pub mod path;
 
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -46,7 +47,11 @@ impl TestServer {
         let data_dir = config.store.data_dir.clone();
         let stop = CancellationToken::new();
         let s = stop.clone();
-        let task = tokio::spawn(async move { shiftd::run(config, listener, async move { s.cancelled().await }).await });
+        let task = tokio::spawn(async move {
+            shiftd::run(config, listener, async move { s.cancelled().await })
+                .await
+                .map_err(anyhow::Error::from)
+        });
         let http = reqwest::Client::builder().timeout(Duration::from_secs(60)).build()?;
         let server = Self {
             base,

@@ -7,8 +7,9 @@ use std::time::Duration;
 
 use anyhow::{Context, Result, anyhow, bail};
 use serde_json::{Value, json};
-use shift_proto::{CorrectionDoc, CorrectionReason, PlanDocument, WaypointDoc};
+use shift_proto::{CorrectionReason, PlanDocument};
 use shift_tests::fleet::{ScriptedRobot, free_port, room_grid};
+use shift_tests::path::{along, check_correction, clearance, dist, longest_straight, seg_dist};
 use shift_tests::{TestServer, test_config};
 
 const LONG: Duration = Duration::from_secs(120);
@@ -21,7 +22,8 @@ async fn planned(site: &str, map: Value, start: [f64; 2]) -> Result<Planned> {
     let endpoint = format!("tcp/127.0.0.1:{}", free_port()?);
     let mut config = test_config(dir.path());
     config.zenoh.listen = vec![endpoint.clone()];
-    config.zenoh.site = site.into();
+    // No default site: the robot's data reaches the site only by its assignment.
+    config.zenoh.site = String::new();
     config.demo.enabled = false;
     let server = TestServer::start(config).await?;
     let (code, body) = server.post(&format!("/v1/sites/{site}/map"), &map).await?;
@@ -46,100 +48,6 @@ async fn planned(site: &str, map: Value, start: [f64; 2]) -> Result<Planned> {
 
 /// A server, its robot r1, the plan assigned to it, its id, and the data dir (kept while the test runs).
 type Planned = (TestServer, ScriptedRobot, PlanDocument, String, tempfile::TempDir);
-
-/// The longest straight stretch of the plan, as waypoint indices `(i, j)`: every waypoint between lies on
-/// the line from `i` to `j` (the document samples lanes densely for its speed profile).
-fn longest_straight(w: &[WaypointDoc]) -> (usize, usize) {
-    let mut best = (0, 1);
-    let mut i = 0;
-    while i + 1 < w.len() {
-        let mut j = i + 1;
-        while j + 1 < w.len()
-            && (i + 1..=j).all(|k| seg_dist((w[k].x, w[k].y), (w[i].x, w[i].y), (w[j + 1].x, w[j + 1].y)) < 1e-6)
-        {
-            j += 1;
-        }
-        if dist(w, i, j) > dist(w, best.0, best.1) {
-            best = (i, j);
-        }
-        i = j;
-    }
-    best
-}
-
-fn dist(w: &[WaypointDoc], i: usize, j: usize) -> f64 {
-    (w[j].x - w[i].x).hypot(w[j].y - w[i].y)
-}
-
-/// The point `s` metres from waypoint `i` towards waypoint `j`, and the heading.
-fn along(w: &[WaypointDoc], (i, j): (usize, usize), s: f64) -> (f64, f64, f64) {
-    let (a, b) = (&w[i], &w[j]);
-    let l = dist(w, i, j);
-    let (ux, uy) = ((b.x - a.x) / l, (b.y - a.y) / l);
-    (a.x + ux * s, a.y + uy * s, uy.atan2(ux))
-}
-
-/// Distance from p to segment ab.
-fn seg_dist(p: (f64, f64), a: (f64, f64), b: (f64, f64)) -> f64 {
-    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
-    let l2 = dx * dx + dy * dy;
-    let t = if l2 > 0.0 {
-        (((p.0 - a.0) * dx + (p.1 - a.1) * dy) / l2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (p.0 - a.0 - t * dx).hypot(p.1 - a.1 - t * dy)
-}
-
-/// Smallest distance between the path's segments in `range` (waypoint indices, inclusive ends) and the points.
-fn clearance(w: &[WaypointDoc], range: std::ops::Range<usize>, pts: &[[f32; 3]]) -> f64 {
-    let mut best = f64::INFINITY;
-    for i in range.start..range.end.min(w.len() - 1) {
-        for p in pts {
-            let d = seg_dist(
-                (f64::from(p[0]), f64::from(p[1])),
-                (w[i].x, w[i].y),
-                (w[i + 1].x, w[i + 1].y),
-            );
-            best = best.min(d);
-        }
-    }
-    best
-}
-
-/// Checks a correction against the document it patches: it applies, the stretches before `from` and from
-/// `to` on are the old ones, and the patch with its two joins keeps ≥ radius from every obstacle point (with
-/// `whole`, the entire new path does). Returns the corrected document.
-fn check_correction(old: &PlanDocument, c: &CorrectionDoc, obstacle: &[[f32; 3]], whole: bool) -> Result<PlanDocument> {
-    let new = c.apply(old).map_err(|e| anyhow!("{e}"))?;
-    assert_eq!(new.version, old.version + 1);
-    assert_eq!(
-        &new.waypoints[..c.from],
-        &old.waypoints[..c.from],
-        "kept before the patch"
-    );
-    let tail = new.waypoints.len() - (old.waypoints.len() - c.to);
-    for (a, b) in new.waypoints[tail..].iter().zip(&old.waypoints[c.to..]) {
-        assert_eq!((a.x, a.y), (b.x, b.y), "kept after the patch");
-    }
-    let range = if whole {
-        0..new.waypoints.len()
-    } else {
-        c.from.saturating_sub(1)..(c.from + c.waypoints.len() + 1)
-    };
-    let d = clearance(&new.waypoints, range, obstacle);
-    assert!(
-        d >= RADIUS - 1e-6,
-        "corrected path comes {d:.3} m from an obstacle point (radius {RADIUS})"
-    );
-    for w in &c.waypoints {
-        assert!(
-            w.v.is_finite() && w.v > 0.0 && w.t.is_finite(),
-            "re-profiled speeds and times: {w:?}"
-        );
-    }
-    Ok(new)
-}
 
 /// Applies the corrections the robot receives after `doc` until it is at `version`.
 async fn catch_up(robot: &ScriptedRobot, mut doc: PlanDocument, version: u64) -> Result<PlanDocument> {
@@ -204,7 +112,7 @@ async fn an_obstacle_ahead_gets_a_clear_correction_the_robot_can_fetch() -> Resu
         "the patch is on the lane with the post: {c:?}"
     );
     assert!(c.compute_us > 0);
-    let new = check_correction(&doc, &c, &post, true)?;
+    let new = check_correction(&doc, &c, &post, true, RADIUS)?;
     // The patch joins the lane: its ends lie on the old lane's line.
     for p in [&c.waypoints[0], &c.waypoints[c.waypoints.len() - 1]] {
         let d = seg_dist((p.x, p.y), (w[seg.0].x, w[seg.0].y), (w[seg.1].x, w[seg.1].y));
@@ -259,7 +167,7 @@ async fn a_closed_corridor_is_skipped_not_driven_through() -> Result<()> {
     assert_eq!(c.reason, CorrectionReason::Skipped, "{c:?}");
     assert!(!c.skipped.is_empty(), "the left-out stretch is reported");
     // Later passes through the corridor are corrected when the robot gets near them; this one is clear.
-    let new = check_correction(&doc, &c, &wall, false)?;
+    let new = check_correction(&doc, &c, &wall, false, RADIUS)?;
     let (_, st) = server.get(&format!("/v1/plans/{id}")).await?;
     assert!(st["missed"].as_array().is_some_and(|m| !m.is_empty()), "{st}");
     let fetched = robot.query_plan("r1", LONG).await?;

@@ -4,7 +4,7 @@
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result};
+use crate::error::{Context, Result};
 use serde::Deserialize;
 
 /// Everything `shiftd serve` can be told.
@@ -25,6 +25,20 @@ pub struct Config {
     pub watch: shift_engine::WatchParams,
     /// MCAP recording.
     pub record: crate::record::config::RecordConfig,
+}
+
+impl Config {
+    /// The engine's sizes, routing and watching from this configuration.
+    pub fn engine_config(&self) -> shift_engine::EngineConfig {
+        shift_engine::EngineConfig {
+            workers: self.jobs.effective_workers(),
+            queue_capacity: self.jobs.queue_capacity,
+            watch: self.watch,
+            default_site: self.zenoh.default_site(),
+            blind_after_ms: self.zenoh.robot_timeout_s.max(1).saturating_mul(1000),
+            progress: shift_engine::ProgressParams::default(),
+        }
+    }
 }
 
 /// `[http]`.

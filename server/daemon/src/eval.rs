@@ -5,7 +5,7 @@
 use std::path::Path;
 use std::time::Instant;
 
-use anyhow::Result;
+use crate::error::Result;
 use serde::Serialize;
 use shift_planner::baseline::{Baseline, run_baseline};
 use shift_planner::decompose::DecompositionMethod;

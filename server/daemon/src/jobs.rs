@@ -8,22 +8,19 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
-use shift_engine::{Event, JobOutcome, PlanJob, run_job};
+use shift_engine::{Event, JobOutcome, LiveMaps, PlanJob, run_job, to_document};
 use shift_planner::PlannerError;
 use shift_planner::geom::Point2;
 use shift_planner::pipeline::{PlanMonitor, RegionSummary};
 use shift_proto::RegionReady;
-use tokio::sync::mpsc;
 
-use crate::brain::Msg;
-use crate::fleet::live::LiveMaps;
-use crate::plan_doc::to_document;
+use crate::engine_loop::handle::{EngineHandle, Msg};
 
 /// Spawns jobs and holds their cancel flags.
 #[derive(Debug)]
 pub struct JobRunner {
     runtime: tokio::runtime::Handle,
-    to_engine: mpsc::Sender<Msg>,
+    to_engine: EngineHandle,
     cancels: HashMap<String, Arc<AtomicBool>>,
     interrupt: Arc<AtomicBool>,
     overlay: Option<Arc<LiveMaps>>,
@@ -33,7 +30,7 @@ struct Monitor {
     plan_id: String,
     cancel: Arc<AtomicBool>,
     interrupt: Arc<AtomicBool>,
-    to_engine: mpsc::Sender<Msg>,
+    to_engine: EngineHandle,
     last_sent: f64,
 }
 
@@ -42,7 +39,7 @@ impl PlanMonitor for Monitor {
         if fraction >= self.last_sent + 0.01 {
             self.last_sent = fraction;
             // Progress is lossy on purpose: a full channel drops it rather than stall the planner.
-            let _ = self.to_engine.try_send(Msg::event(Event::JobProgress {
+            let _ = self.to_engine.try_tell(Msg::event(Event::JobProgress {
                 plan_id: self.plan_id.clone(),
                 progress: fraction,
             }));
@@ -55,7 +52,7 @@ impl PlanMonitor for Monitor {
 
     fn region_ready(&mut self, region: &RegionSummary, path: &[Point2]) {
         // Not lossy: a client may start a robot on it. Regions are few; waiting for room is cheap.
-        let _ = self.to_engine.blocking_send(Msg::event(Event::JobRegionReady {
+        let _ = self.to_engine.blocking_tell(Msg::event(Event::JobRegionReady {
             plan_id: self.plan_id.clone(),
             region: RegionReady {
                 region: region.id,
@@ -69,7 +66,7 @@ impl PlanMonitor for Monitor {
 impl JobRunner {
     /// A runner spawning on `runtime`'s blocking pool and reporting to the engine thread; with `overlay`,
     /// each job sees its site's live obstacle points (see [`live_overlay`]).
-    pub fn new(runtime: tokio::runtime::Handle, to_engine: mpsc::Sender<Msg>, overlay: Option<Arc<LiveMaps>>) -> Self {
+    pub fn new(runtime: tokio::runtime::Handle, to_engine: EngineHandle, overlay: Option<Arc<LiveMaps>>) -> Self {
         Self {
             runtime,
             to_engine,
@@ -112,14 +109,16 @@ impl JobRunner {
                 }
                 Ok(Err(PlannerError::Cancelled)) if interrupt.load(Ordering::Relaxed) => JobOutcome::Interrupted,
                 Ok(Err(PlannerError::Cancelled)) => JobOutcome::Cancelled,
-                Ok(Err(e)) => JobOutcome::Failed(e.to_string()),
+                Ok(Err(e)) => JobOutcome::Failed { reason: e.to_string() },
                 Err(_) => {
                     tracing::error!(plan_id, "planner panicked");
-                    JobOutcome::Failed("internal planner error (logged)".into())
+                    JobOutcome::Failed {
+                        reason: "internal planner error (logged)".into(),
+                    }
                 }
             };
             // The engine must learn of every end, so this one waits for room.
-            let _ = to_engine.blocking_send(Msg::event(Event::JobFinished { plan_id, outcome }));
+            let _ = to_engine.blocking_tell(Msg::event(Event::JobFinished { plan_id, outcome }));
         });
     }
 

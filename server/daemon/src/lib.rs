@@ -1,16 +1,19 @@
 //! shiftd: the SHIFT daemon and its command-line front end.
 //!
 //! `shiftd serve` (the HTTP API over the engine, the store and the plan job pool: [`run`]), `shiftd plan` (one
-//! plan from a scene or a map) and `shiftd eval` (every strategy and baseline on a folder of scenes). The file I/O, the wire conversion and the rendering live here; the algorithms are in
-//! `shift-planner`.
+//! plan from a scene or a map) and `shiftd eval` (every strategy and baseline on a folder of scenes). Adapters
+//! only: HTTP, Zenoh, the store, the job and check pools, the recorder, file I/O and rendering, each talking to
+//! the engine loop through its handle (`engine_loop::handle`). The fleet's decisions are in `shift-engine`, the
+//! algorithms in `shift-planner`.
 
-pub mod brain;
+pub mod clock;
 pub mod config;
+pub mod engine_loop;
+pub mod error;
 pub mod eval;
 pub mod fleet;
 pub mod http;
 pub mod jobs;
-pub mod plan_doc;
 pub mod record;
 pub mod render;
 pub mod replay;
@@ -21,4 +24,4 @@ pub mod views;
 pub mod watch;
 
 pub use config::Config;
-pub use server::run;
+pub use server::{run, run_with_clock};

@@ -6,6 +6,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
+use shift_engine::to_document;
 use shift_planner::decompose::DecompositionMethod;
 use shift_planner::geom::Point2;
 use shift_planner::order::OrderMethod;
@@ -14,7 +15,6 @@ use shift_planner::pipeline::{NoMonitor, PlanParams, plan_shaped};
 use shift_planner::space::{CoverageSpace, RobotShape};
 use shift_planner::speed::{SpeedLimits, SpeedParams};
 use shiftd::eval::{TABLE_HEADER, run_eval, table_line};
-use shiftd::plan_doc::to_document;
 use shiftd::render::render_png;
 use shiftd::scene_io::{load_attribute, load_map, load_scene, scene_attribute_path};
 
@@ -151,7 +151,7 @@ fn main() -> ExitCode {
         Command::Serve(args) => cmd_serve(args),
         Command::Plan(args) => cmd_plan(args),
         Command::Eval(args) => cmd_eval(args),
-        Command::Replay(args) => shiftd::replay::run_cli(args),
+        Command::Replay(args) => shiftd::replay::run_cli(args).map_err(anyhow::Error::from),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -192,7 +192,8 @@ fn cmd_serve(args: ServeArgs) -> Result<()> {
         let listener = tokio::net::TcpListener::bind(config.http.bind)
             .await
             .with_context(|| format!("binding {}", config.http.bind))?;
-        shiftd::run(config, listener, shutdown_signal()).await
+        shiftd::run(config, listener, shutdown_signal()).await?;
+        Ok(())
     })
 }
 

@@ -4,7 +4,8 @@
 
 use std::path::Path;
 
-use anyhow::{Result, anyhow};
+use crate::err;
+use crate::error::Result;
 use plotters::prelude::*;
 use shift_planner::map::CellState;
 use shift_planner::pipeline::{PlanOutput, WaypointKind};
@@ -86,7 +87,7 @@ pub fn render_png(
                     let a = to_px(pair[0].position.x, pair[0].position.y);
                     let b = to_px(pair[1].position.x, pair[1].position.y);
                     root.draw(&PathElement::new(vec![a, b], colour.stroke_width(1)))
-                        .map_err(|e| anyhow!("drawing: {e}"))?;
+                        .map_err(|e| err!("drawing: {e}"))?;
                 }
             }
             Some((profile, limits)) => {
@@ -105,18 +106,18 @@ pub fn render_png(
                         vec![to_px(p.x, p.y), to_px(q.x, q.y)],
                         colour.stroke_width(stroke),
                     ))
-                    .map_err(|e| anyhow!("drawing: {e}"))?;
+                    .map_err(|e| err!("drawing: {e}"))?;
                 }
                 colour_bar(&root, map_w, h, limits)?;
             }
         }
         let dock = to_px(space.start.x, space.start.y);
         root.draw(&Circle::new(dock, 4, RGBColor(0, 160, 0).filled()))
-            .map_err(|e| anyhow!("drawing: {e}"))?;
-        root.present().map_err(|e| anyhow!("drawing: {e}"))?;
+            .map_err(|e| err!("drawing: {e}"))?;
+        root.present().map_err(|e| err!("drawing: {e}"))?;
     }
-    let img = image::RgbImage::from_raw(w, h, buf).ok_or_else(|| anyhow!("image buffer size"))?;
-    img.save(path).map_err(|e| anyhow!("writing {}: {e}", path.display()))?;
+    let img = image::RgbImage::from_raw(w, h, buf).ok_or_else(|| err!("image buffer size"))?;
+    img.save(path).map_err(|e| err!("writing {}: {e}", path.display()))?;
     Ok(())
 }
 
@@ -158,7 +159,7 @@ fn colour_bar<DB: DrawingBackend>(
             vec![(left, y), (left + 16, y)],
             speed_colour(f).stroke_width(1),
         ))
-        .map_err(|e| anyhow!("drawing: {e}"))?;
+        .map_err(|e| err!("drawing: {e}"))?;
     }
     let k = (h / 120).clamp(2, 5) as i32;
     for (v, y) in [(limits.v_max_mps, top), (limits.v_min_mps, bottom - 2 * k)] {
@@ -191,7 +192,7 @@ fn draw_number<DB: DrawingBackend>(
     for ch in text.chars() {
         if ch == '.' {
             root.draw(&Circle::new((cx, y + 2 * k), 1, BLACK.filled()))
-                .map_err(|e| anyhow!("drawing: {e}"))?;
+                .map_err(|e| err!("drawing: {e}"))?;
             cx += k / 2 + 2;
             continue;
         }
@@ -202,7 +203,7 @@ fn draw_number<DB: DrawingBackend>(
                     vec![(cx + a * k, y + b * k), (cx + c * k, y + e * k)],
                     BLACK.stroke_width(1),
                 ))
-                .map_err(|e| anyhow!("drawing: {e}"))?;
+                .map_err(|e| err!("drawing: {e}"))?;
             }
         }
         cx += k + 3;

@@ -2,7 +2,10 @@
 //!
 //! - Onto Zenoh ([`onto_zenoh`]): every ingested message is put back on the key it came in on, and liveliness
 //!   tokens are declared and undeclared, with the original spacing divided by `--speed`, so a robot's session
-//!   can be reproduced against a running daemon.
+//!   can be reproduced against a running daemon. A ROS 2 bag (rosbag2's MCAP storage: topics such as
+//!   `/robot1/scan` with `ros2msg` schemas and CDR messages) replays too: each topic is mapped to the key the
+//!   configured `[zenoh] mapping` reads ([`KeyMap`]: leading slash dropped, namespace kept for
+//!   zenoh-bridge-ros2dds; `[ns/]{robot}/{odom|points|scan}` re-keyed for native and rmw_zenoh fleets).
 //! - Into the engine ([`into_engine`], `--into-engine`): the recorded engine inputs, in their handling order,
 //!   through a fresh `Engine` built with the recorded sizes and fed the recorded clock; one JSON line per
 //!   decision. With `--check` each input's decisions are compared with the recorded ones, and any difference
@@ -13,10 +16,13 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use anyhow::{Context, Result, anyhow, bail};
+use crate::bail;
+use crate::err;
+use crate::error::{Context, Result};
 use serde_json::Value;
 use shift_engine::recorded::{Decision, RecordedDecisions, RecordedEngineConfig, RecordedInput, decisions_of};
 use shift_engine::{Engine, EngineConfig};
+use shift_proto::keys::{KeySpace, Ros2Mapping, Stream};
 use zenoh::bytes::Encoding;
 
 use crate::record::channels::Kind;
@@ -194,6 +200,14 @@ struct DecisionLine<'a> {
 /// Feeds the recorded inputs through a fresh engine per daemon run and writes one JSON line per decision to
 /// `out`: `{"run", "seq", "now_ms", "decision"}`. With `check`, compares with the recorded decisions.
 pub fn into_engine(rec: &Recorded, out: &mut dyn Write, check: bool) -> Result<EngineReplay> {
+    if check && rec.inputs.is_empty() {
+        bail!(
+            "no recorded engine inputs ({} messages on {} topics): --into-engine --check needs a recording made by \
+             `shiftd serve --record`; a ROS 2 bag or an ingest-only file can only be replayed onto Zenoh",
+            rec.topics.values().sum::<usize>(),
+            rec.topics.len()
+        );
+    }
     fn mismatch(report: &mut EngineReplay, m: String) {
         if report.mismatches.len() < MAX_REPORTED {
             report.mismatches.push(m);
@@ -210,11 +224,7 @@ pub fn into_engine(rec: &Recorded, out: &mut dyn Write, check: bool) -> Result<E
                     tracing::warn!(run, "no engine config recorded for this run: defaults");
                     EngineConfig::default()
                 },
-                |c| EngineConfig {
-                    workers: c.workers,
-                    queue_capacity: c.queue_capacity,
-                    watch: c.watch,
-                },
+                RecordedEngineConfig::engine_config,
             );
             engine = Some((run, Engine::new(config), 0));
         }
@@ -232,19 +242,7 @@ pub fn into_engine(rec: &Recorded, out: &mut dyn Write, check: bool) -> Result<E
         }
         *last_seq = seq;
         report.inputs += 1;
-        let result = input
-            .event
-            .clone()
-            .into_event()
-            .map_err(|e| anyhow!("run {run} seq {seq}: the recorded event does not rebuild: {e}"))
-            .map(|event| eng.handle(event, input.now_ms));
-        let decisions = match result {
-            Ok(r) => decisions_of(&r),
-            Err(e) => {
-                mismatch(&mut report, e.to_string());
-                continue;
-            }
-        };
+        let decisions = decisions_of(&eng.handle(input.event.clone(), input.now_ms));
         for decision in &decisions {
             let line = DecisionLine {
                 run,
@@ -256,7 +254,10 @@ pub fn into_engine(rec: &Recorded, out: &mut dyn Write, check: bool) -> Result<E
             report.decisions += 1;
         }
         if check {
-            let got = serde_json::to_value(&decisions)?;
+            // A recording of an older format is compared with what that format could hold.
+            let format = rec.configs.get(&run).map_or(1, |c| c.format);
+            let got: Vec<Decision> = decisions.iter().filter_map(|d| d.as_format(format)).collect();
+            let got = serde_json::to_value(&got)?;
             match rec.decisions.get(&(run, seq)) {
                 None => mismatch(&mut report, format!("run {run} seq {seq}: no recorded decisions")),
                 Some(r) => {
@@ -284,13 +285,49 @@ pub fn into_engine(rec: &Recorded, out: &mut dyn Write, check: bool) -> Result<E
     Ok(report)
 }
 
+/// Where recorded topics go on Zenoh.
+#[derive(Debug, Clone)]
+pub struct KeyMap {
+    keys: KeySpace,
+    mapping: Ros2Mapping,
+}
+
+impl KeyMap {
+    /// Topics mapped for a fleet with these keys and this mapping.
+    pub fn new(keys: KeySpace, mapping: Ros2Mapping) -> Self {
+        Self { keys, mapping }
+    }
+
+    /// The key a recorded `topic` of `kind` is put on: SHIFT recordings keep the Zenoh key as the topic; a ROS 2
+    /// topic (`/…`) loses its leading slash and, unless the fleet reads zenoh-bridge-ros2dds keys (which are
+    /// exactly that), is re-keyed from its `{robot}/{odom|points|scan}` tail. `None` for a ROS topic of no
+    /// robot stream.
+    pub fn key_for(&self, topic: &str, kind: Kind) -> Option<String> {
+        let Some(ros_topic) = topic.strip_prefix('/') else {
+            return Some(topic.to_owned());
+        };
+        if matches!(self.mapping, Ros2Mapping::BridgeRos2dds { .. }) {
+            return Some(ros_topic.to_owned());
+        }
+        let mut parts = ros_topic.rsplitn(3, '/');
+        let (_leaf, robot) = (parts.next()?, parts.next()?);
+        let stream = match kind {
+            Kind::Odometry | Kind::OdomJson => Stream::Odom,
+            Kind::PointCloud2 => Stream::Cloud,
+            Kind::LaserScan => Stream::Scan,
+            _ => return None,
+        };
+        self.mapping.robot_key(&self.keys, robot, stream).ok().flatten()
+    }
+}
+
 /// Puts the recorded ingest messages back on Zenoh with their original spacing divided by `speed`,
 /// declaring and undeclaring liveliness tokens as they were. Returns the number of actions carried out.
-pub async fn onto_zenoh(rec: &Recorded, session: &zenoh::Session, speed: f64) -> Result<usize> {
+pub async fn onto_zenoh(rec: &Recorded, session: &zenoh::Session, keys: &KeyMap, speed: f64) -> Result<usize> {
     if !(speed.is_finite() && speed > 0.0) {
         bail!("--speed must be a positive number, got {speed}");
     }
-    let z = |e: zenoh::Error| anyhow!("zenoh: {e}");
+    let z = |e: zenoh::Error| err!("zenoh: {e}");
     let Some(&(t0, _)) = rec.ingest.first() else {
         return Ok(0);
     };
@@ -307,7 +344,11 @@ pub async fn onto_zenoh(rec: &Recorded, session: &zenoh::Session, speed: f64) ->
                 } else {
                     Encoding::APPLICATION_JSON
                 };
-                session.put(key, bytes.clone()).encoding(encoding).await.map_err(z)?;
+                let Some(key) = keys.key_for(key, *kind) else {
+                    tracing::warn!(topic = key, "no key for this topic in the configured mapping: skipped");
+                    continue;
+                };
+                session.put(&key, bytes.clone()).encoding(encoding).await.map_err(z)?;
             }
             Action::Token { key, alive: true } => {
                 let token = session.liveliness().declare_token(key).await.map_err(z)?;
@@ -397,15 +438,17 @@ pub fn run_cli(args: ReplayArgs) -> Result<()> {
     runtime.block_on(async move {
         let session = zenoh::open(config.to_zenoh()?)
             .await
-            .map_err(|e| anyhow!("opening the zenoh session: {e}"))?;
+            .map_err(|e| err!("opening the zenoh session: {e}"))?;
         // Give the session a moment to meet its peers before the first put.
         tokio::time::sleep(Duration::from_millis(500)).await;
-        let n = onto_zenoh(&rec, &session, args.speed).await?;
+        let keys = KeySpace::new(&config.prefix, &config.fleet).map_err(|e| err!("zenoh keys: {e}"))?;
+        let map = KeyMap::new(keys, config.mapping.clone());
+        let n = onto_zenoh(&rec, &session, &map, args.speed).await?;
         eprintln!("{n} messages and token changes replayed onto zenoh");
         session
             .close()
             .await
-            .map_err(|e| anyhow!("closing the zenoh session: {e}"))?;
+            .map_err(|e| err!("closing the zenoh session: {e}"))?;
         Ok(())
     })
 }

@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result};
+use crate::error::{Context, Result};
 use shift_planner::map::{GridGeometry, LoadedMap, load_ros_map};
 use shift_planner::speed::AttributeMap;
 use shift_proto::{AttributeDoc, SceneFile};

@@ -9,17 +9,20 @@ use std::future::Future;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use anyhow::{Context, Result, anyhow};
+use crate::err;
+use crate::error::{Context, Result};
 use metrics_exporter_prometheus::{Matcher, PrometheusBuilder, PrometheusHandle};
-use shift_engine::{Engine, EngineConfig, Event, MapSource, SiteRecord};
+use shift_engine::sensors::SensorHub;
+use shift_engine::{Engine, Event, LiveMaps, LoadedSite, MapSource, SiteRecord};
 use tokio::net::TcpListener;
 use tokio::sync::broadcast;
 use tokio_util::sync::CancellationToken;
 
-use crate::brain::{self, BrainHandle, Msg, now_ms};
+use crate::clock::SharedClock;
 use crate::config::Config;
-use crate::fleet::live::LiveMaps;
-use crate::fleet::{self, Fleet};
+use crate::engine_loop::handle::{EngineHandle, Msg};
+use crate::engine_loop::{self, LoopParts};
+use crate::fleet::{self, Fleet, FleetParts};
 use crate::http::{AppState, router};
 use crate::record::Recording;
 use crate::store::Store;
@@ -33,7 +36,7 @@ const DEMO_IMAGE: &[u8] = include_bytes!("../../../tests/fixtures/four-rooms-obs
 pub fn prometheus() -> Result<PrometheusHandle> {
     // A mutex, not a OnceLock check-then-set: two servers starting at once must not both install.
     static HANDLE: Mutex<Option<PrometheusHandle>> = Mutex::new(None);
-    let mut slot = HANDLE.lock().map_err(|_| anyhow!("prometheus handle lock poisoned"))?;
+    let mut slot = HANDLE.lock().map_err(|_| err!("prometheus handle lock poisoned"))?;
     if let Some(h) = slot.as_ref() {
         return Ok(h.clone());
     }
@@ -47,11 +50,11 @@ pub fn prometheus() -> Result<PrometheusHandle> {
     ];
     let handle = PrometheusBuilder::new()
         .set_buckets(&latency)
-        .map_err(|e| anyhow!("prometheus buckets: {e}"))?
+        .map_err(|e| err!("prometheus buckets: {e}"))?
         .set_buckets_for_metric(Matcher::Prefix("shift_ingest_".into()), &ingest)
-        .map_err(|e| anyhow!("prometheus ingest buckets: {e}"))?
+        .map_err(|e| err!("prometheus ingest buckets: {e}"))?
         .install_recorder()
-        .map_err(|e| anyhow!("prometheus recorder: {e}"))?;
+        .map_err(|e| err!("prometheus recorder: {e}"))?;
     *slot = Some(handle.clone());
     Ok(handle)
 }
@@ -62,52 +65,80 @@ pub async fn run(
     listener: TcpListener,
     shutdown: impl Future<Output = ()> + Send + 'static,
 ) -> Result<()> {
+    run_with_clock(config, listener, shutdown, crate::clock::system()).await
+}
+
+/// [`run`] on a given clock.
+pub async fn run_with_clock(
+    config: Config,
+    listener: TcpListener,
+    shutdown: impl Future<Output = ()> + Send + 'static,
+    clock: SharedClock,
+) -> Result<()> {
     let prometheus = prometheus()?;
     let store = Arc::new(Store::open(&config.store.data_dir)?);
     let views = Arc::new(Views::default());
     let (events, _) = broadcast::channel(1024);
-    let engine = Engine::new(EngineConfig {
-        workers: config.jobs.effective_workers(),
-        queue_capacity: config.jobs.queue_capacity,
-        watch: config.watch,
-    });
+    let engine_config = config.engine_config();
+    let engine = Engine::new(engine_config.clone());
     let zenoh = if config.zenoh.enabled {
         Some(fleet::open(&config.zenoh).await?)
     } else {
         None
     };
-    let publisher = zenoh.as_ref().map(|(s, k)| fleet::publisher(s, k));
     let live = Arc::new(LiveMaps::default());
-    let recording = Recording::start(&config, zenoh.as_ref().map(|(s, k)| (s, k)), live.clone()).await?;
-    let (brain, engine_thread) = brain::spawn(
+    let sensors = Arc::new(std::sync::Mutex::new(SensorHub::new(config.zenoh.sensor_params())));
+    let recording = Recording::start(
+        &config,
+        &engine_config,
+        zenoh.as_ref().map(|z| (&z.session, &z.keys)),
+        live.clone(),
+        &clock,
+    )
+    .await?;
+    let (engine, engine_thread) = engine_loop::spawn(
         engine,
-        brain::BrainParts {
+        LoopParts {
             store: store.clone(),
             views: views.clone(),
             events: events.clone(),
-            publisher,
+            publisher: zenoh.as_ref().map(|z| z.publisher.clone()),
             live: live.clone(),
-            overlay: config.jobs.live_overlay.then(|| live.clone()),
+            overlay: config.jobs.live_overlay,
+            sensors: sensors.clone(),
             runtime: tokio::runtime::Handle::current(),
             recorder: recording.as_ref().map(Recording::recorder),
+            clock: clock.clone(),
         },
     )
-    .context("starting the engine thread")?;
-    restore(&config, &store, &views, &brain).await?;
+    .context("starting the engine loop")?;
+    restore(&config, &store, &views, &engine, &clock).await?;
     let fleet = match zenoh {
-        Some((session, keys)) => Some(
-            Fleet::start(&config.zenoh, session, keys, brain.clone(), views.clone(), live.clone())
-                .await
-                .context("starting the Zenoh fleet bridge")?,
+        Some(session) => Some(
+            Fleet::start(
+                &config.zenoh,
+                session,
+                FleetParts {
+                    engine: engine.clone(),
+                    views: views.clone(),
+                    live: live.clone(),
+                    sensors: sensors.clone(),
+                    clock: clock.clone(),
+                },
+            )
+            .await
+            .context("starting the Zenoh fleet bridge")?,
         ),
         None => None,
     };
 
     let token = CancellationToken::new();
     let state = AppState {
-        brain: brain.clone(),
+        engine: engine.clone(),
         views,
         live,
+        sensors,
+        clock,
         events,
         shutdown: token.clone(),
         prometheus,
@@ -130,17 +161,17 @@ pub async fn run(
         f.shutdown().await;
     }
     tracing::info!("draining plan jobs");
-    brain.call(Event::Shutdown).await.ok();
-    let mut running = brain.running();
+    engine.call(Event::Shutdown).await.ok();
+    let mut running = engine.running();
     let grace = Duration::from_secs(config.jobs.shutdown_grace_s);
     let idle = |n: &usize| *n == 0;
     if tokio::time::timeout(grace, running.wait_for(idle)).await.is_err() {
         tracing::warn!("grace period over: interrupting running plans (they stay queued)");
-        brain.tell(Msg::InterruptJobs).await.ok();
+        engine.tell(Msg::InterruptJobs).await.ok();
         // The planner checks its flag between stages and regions; this bounds a pathological stage.
         let _ = tokio::time::timeout(Duration::from_secs(60), running.wait_for(idle)).await;
     }
-    brain.tell(Msg::Stop).await.ok();
+    engine.tell(Msg::Stop).await.ok();
     tokio::task::spawn_blocking(move || engine_thread.join()).await.ok();
     if let Some(r) = recording {
         r.finish().await.context("finishing the MCAP recording")?;
@@ -150,27 +181,48 @@ pub async fn run(
 }
 
 /// Feeds the engine what the store holds, plus the demo site when configured and missing.
-async fn restore(config: &Config, store: &Arc<Store>, views: &Arc<Views>, brain: &BrainHandle) -> Result<()> {
+async fn restore(
+    config: &Config,
+    store: &Arc<Store>,
+    views: &Arc<Views>,
+    engine: &EngineHandle,
+    clock: &SharedClock,
+) -> Result<()> {
     let s = store.clone();
-    let (sites, plans) = tokio::task::spawn_blocking(move || -> Result<_> {
+    let (sites, plans, active) = tokio::task::spawn_blocking(move || -> Result<_> {
         let mut sites = Vec::new();
         for rec in s.sites()? {
-            match rec.source.parse() {
-                Ok(map) => sites.push((rec, map)),
-                Err(e) => tracing::error!(site = rec.site, "stored map no longer parses, skipped: {e}"),
+            let site = rec.site.clone();
+            match LoadedSite::parse(rec) {
+                Ok(loaded) => sites.push(loaded),
+                Err(e) => tracing::error!(site, "stored map no longer parses, skipped: {e}"),
             }
         }
-        Ok((sites, s.plans()?))
+        let plans = s.plans()?;
+        // The plans robots were driving, at their last committed version.
+        let mut active = Vec::new();
+        for p in plans.iter().filter(|p| p.status == shift_proto::PlanStatus::Active) {
+            if let Some(doc) = s.current(&p.plan_id)? {
+                active.push(Arc::new(doc));
+            }
+        }
+        Ok((sites, plans, active))
     })
-    .await??;
-    let has_demo = sites.iter().any(|(r, _)| r.site == config.demo.site);
+    .await
+    .map_err(|e| crate::err!("restoring from the store: {e}"))??;
+    let has_demo = sites.iter().any(|s| s.record.site == config.demo.site);
     let finished: Vec<String> = plans
         .iter()
         .filter(|p| p.version > 0)
         .map(|p| p.plan_id.clone())
         .collect();
-    tracing::info!(sites = sites.len(), plans = plans.len(), "restoring from the store");
-    brain.call(Event::Restore { sites, plans }).await?;
+    tracing::info!(
+        sites = sites.len(),
+        plans = plans.len(),
+        driven = active.len(),
+        "restoring from the store"
+    );
+    engine.call(Event::Restore { sites, plans, active }).await?;
     // Computed plans are served again from their stored documents, corrections applied.
     for id in finished {
         if let Some(doc) = store.current(&id)? {
@@ -182,13 +234,13 @@ async fn restore(config: &Config, store: &Arc<Store>, views: &Arc<Views>, brain:
             yaml: DEMO_YAML.to_owned(),
             image: DEMO_IMAGE.to_vec(),
         };
-        let map = source.parse().context("the bundled demo map")?;
         let record = SiteRecord {
             site: config.demo.site.clone(),
             source,
-            updated_ms: now_ms(),
+            updated_ms: clock.now_ms(),
         };
-        brain.call(Event::MapUploaded { record, map }).await?;
+        let site = LoadedSite::parse(record).context("the bundled demo map")?;
+        engine.call(Event::MapUploaded { site }).await?;
         tracing::info!(
             site = config.demo.site,
             "demo site loaded (four rooms with obstacles, start 0.5,0.5)"

@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use anyhow::{Context, Result};
+use crate::error::{Context, Result};
 use redb::{Database, ReadableDatabase, ReadableTable, TableDefinition};
 use serde::{Serialize, de::DeserializeOwned};
 use shift_engine::{PlanRecord, SiteRecord};
@@ -228,6 +228,8 @@ mod tests {
             robot: None,
             driven_fraction: 0.0,
             missed: Vec::new(),
+            watch: None,
+            progress_jumps: Vec::new(),
             attempts: 0,
             created_ms: 0,
             updated_ms: at,

@@ -103,6 +103,16 @@ impl Views {
         self.plan(&plan_id)?.doc
     }
 
+    /// Every plan's status, oldest first.
+    pub fn statuses(&self) -> Vec<shift_proto::PlanStatusResponse> {
+        let Ok(plans) = self.plans.read() else {
+            return Vec::new();
+        };
+        let mut v: Vec<_> = plans.values().map(|p| (p.record.seq, p.record.to_response())).collect();
+        v.sort_by_key(|(seq, _)| *seq);
+        v.into_iter().map(|(_, s)| s).collect()
+    }
+
     /// Sets a robot's view.
     pub fn set_robot(&self, view: RobotView) {
         if let Ok(mut robots) = self.robots.write() {

@@ -7,23 +7,21 @@ use std::panic::AssertUnwindSafe;
 use std::sync::Arc;
 use std::time::Instant;
 
-use shift_engine::{CheckJob, CheckOutcome, Event, run_check};
-use tokio::sync::mpsc;
+use shift_engine::{CheckJob, CheckOutcome, Event, LiveMaps, run_check};
 
-use crate::brain::Msg;
-use crate::fleet::live::LiveMaps;
+use crate::engine_loop::handle::{EngineHandle, Msg};
 
 /// Spawns checks.
 #[derive(Debug)]
 pub struct CheckRunner {
     runtime: tokio::runtime::Handle,
-    to_engine: mpsc::Sender<Msg>,
+    to_engine: EngineHandle,
     live: Arc<LiveMaps>,
 }
 
 impl CheckRunner {
     /// A runner on `runtime`'s blocking pool reading `live` and reporting to the engine thread.
-    pub fn new(runtime: tokio::runtime::Handle, to_engine: mpsc::Sender<Msg>, live: Arc<LiveMaps>) -> Self {
+    pub fn new(runtime: tokio::runtime::Handle, to_engine: EngineHandle, live: Arc<LiveMaps>) -> Self {
         Self {
             runtime,
             to_engine,
@@ -74,7 +72,7 @@ impl CheckRunner {
                 CheckOutcome::Clear => tracing::debug!(robot = job.robot, compute_us, "path check: clear"),
             }
             // The engine must learn of every end (it keeps one check per robot in flight).
-            let _ = to_engine.blocking_send(Msg::event(Event::CheckFinished {
+            let _ = to_engine.blocking_tell(Msg::event(Event::CheckFinished {
                 robot: job.robot,
                 plan_id: job.plan_id,
                 base_version: job.doc.version,

@@ -1,7 +1,10 @@
 //! The record the engine keeps (and the store persists) per plan.
 
 use serde::{Deserialize, Serialize};
-use shift_proto::{PlanMetricsDoc, PlanRequest, PlanStatus, PlanStatusResponse};
+use shift_proto::{PlanMetricsDoc, PlanRequest, PlanStatus, PlanStatusResponse, ProgressJump, WatchHealth};
+
+/// Progress jumps a record keeps.
+pub const MAX_JUMPS: usize = 16;
 
 /// One plan's state. Every status change is persisted as a whole record.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -35,6 +38,12 @@ pub struct PlanRecord {
     /// Stretches corrections left out (blocked), each `[[x, y], …]`, metres, map frame.
     #[serde(default)]
     pub missed: Vec<Vec<[f64; 2]>>,
+    /// Whether its path is watched against fresh points while a robot drives it.
+    #[serde(default)]
+    pub watch: Option<WatchHealth>,
+    /// Progress found away from where the robot was expected, the latest [`MAX_JUMPS`] kept.
+    #[serde(default)]
+    pub progress_jumps: Vec<ProgressJump>,
     /// How many times a worker started it.
     pub attempts: u32,
     /// Accepted at, milliseconds since the Unix epoch.
@@ -59,6 +68,9 @@ impl PlanRecord {
             robot: self.robot.clone(),
             driven_fraction: self.robot.as_ref().map(|_| self.driven_fraction),
             missed: self.missed.clone(),
+            corrections: self.version.saturating_sub(1),
+            watch: self.watch,
+            progress_jumps: self.progress_jumps.clone(),
             created_ms: self.created_ms,
             updated_ms: self.updated_ms,
         }

@@ -1,27 +1,30 @@
 //! The engine's inputs and decisions as they are recorded (MCAP JSON channels) and replayed.
 //!
-//! [`RecordedEvent`] mirrors [`Event`] with serde: maps travel as their [`SiteRecord`] (re-parsed on replay,
-//! with the same code the daemon uses), job results as the plan document. [`Decision`] summarises a
-//! [`Command`] to something comparable across runs (no store handles, no job payloads). A new `Event` or
-//! `Command` variant needs one arm here; the matches are exhaustive on purpose, so the compiler points at them.
+//! Inputs are the [`Event`]s themselves (their serde form: maps travel as their [`crate::SiteRecord`], re-parsed
+//! on replay with the same code the daemon uses; non-finite numbers as strings). [`Decision`] summarises a
+//! [`Command`] to something comparable across runs (no store handles, no job payloads). A new `Command` variant
+//! needs one arm here; the match is exhaustive on purpose, so the compiler points at it.
+//!
+//! Format versions ([`FORMAT`], in [`RecordedEngineConfig::format`]): 1 (before routing by assignment) lacks
+//! the robots' feed site, sensor counts, plan status fields `corrections`, `watch`, `progress_jumps` and
+//! `feed_site` decisions; [`Decision::as_format`] strips those from a replay's decisions so a format-1
+//! recording is checked against what it could record.
 //!
 //! Replaying [`RecordedInput`]s in `seq` order through a fresh [`Engine`](crate::Engine) with the recorded
 //! `now_ms` and [`EngineConfig`](crate::EngineConfig) gives the recorded [`RecordedDecisions`] again: the engine
 //! is deterministic in its inputs.
 
-use std::sync::Arc;
-
 use serde::{Deserialize, Serialize};
-use shift_proto::{PlanDocument, PlanEvent, PlanRequest, PlanStatusResponse, RegionReady, RobotView, SiteSummary};
+use shift_proto::{PlanEvent, PlanStatusResponse, RobotView, SiteSummary};
 
-use crate::engine::{Command, Event, JobOutcome};
-use crate::error::{EngineError, Result};
-use crate::plan::PlanRecord;
-use crate::robots::Pose2;
-use crate::site::SiteRecord;
+use crate::engine::{Command, Event};
+use crate::error::Result;
+
+/// The recording format this engine writes.
+pub const FORMAT: u32 = 2;
 
 /// One event the engine handled, with the time it was handled at.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct RecordedInput {
     /// Identifies one daemon run (its start, milliseconds since the Unix epoch); `seq` restarts per run.
     pub run: u64,
@@ -30,7 +33,7 @@ pub struct RecordedInput {
     /// The `now_ms` passed to [`Engine::handle`](crate::Engine::handle), milliseconds since the Unix epoch.
     pub now_ms: u64,
     /// The event.
-    pub event: RecordedEvent,
+    pub event: Event,
 }
 
 /// What the engine decided for the input of the same `run` and `seq`.
@@ -47,7 +50,7 @@ pub struct RecordedDecisions {
 }
 
 /// The engine's sizes, recorded at the start of every file so a replay builds the same engine.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RecordedEngineConfig {
     /// Daemon run.
     pub run: u64,
@@ -58,283 +61,46 @@ pub struct RecordedEngineConfig {
     /// [`EngineConfig::watch`](crate::EngineConfig::watch).
     #[serde(default)]
     pub watch: crate::watch::WatchParams,
+    /// [`EngineConfig::default_site`](crate::EngineConfig::default_site).
+    #[serde(default)]
+    pub default_site: Option<String>,
+    /// [`EngineConfig::blind_after_ms`](crate::EngineConfig::blind_after_ms) (absent: the default).
+    #[serde(default)]
+    pub blind_after_ms: Option<u64>,
+    /// Recording format ([`FORMAT`]; absent in format 1).
+    #[serde(default = "format_one")]
+    pub format: u32,
 }
 
-/// A planar pose whose numbers survive JSON even when not finite (NaN and infinities as strings).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct RecordedPose {
-    /// x, metres, map frame.
-    #[serde(with = "lossless_f64")]
-    pub x: f64,
-    /// y, metres, map frame.
-    #[serde(with = "lossless_f64")]
-    pub y: f64,
-    /// Heading, radians.
-    #[serde(with = "lossless_f64")]
-    pub yaw: f64,
-    /// Stamp, nanoseconds (robot clock).
-    pub stamp_ns: i64,
+fn format_one() -> u32 {
+    1
 }
 
-/// [`JobOutcome`] with serde.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case")]
-pub enum RecordedOutcome {
-    /// Computed: the document, the planner's remarks and the per-region paths.
-    Planned {
-        /// The plan document (version 1).
-        doc: Box<PlanDocument>,
-        /// Planner remarks.
-        warnings: Vec<String>,
-    },
-    /// The planner refused or failed.
-    Failed {
-        /// Why.
-        reason: String,
-    },
-    /// Stopped because the plan was cancelled.
-    Cancelled,
-    /// Stopped by shutdown.
-    Interrupted,
-}
-
-/// [`Event`] with serde. See the module docs.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "type", rename_all = "snake_case")]
-pub enum RecordedEvent {
-    /// [`Event::Restore`]: sites as stored (re-parsed on replay) and every plan record.
-    Restore {
-        /// Site records.
-        sites: Vec<SiteRecord>,
-        /// Plan records.
-        plans: Vec<PlanRecord>,
-    },
-    /// [`Event::MapUploaded`].
-    MapUploaded {
-        /// The site record (its map source is re-parsed on replay).
-        record: SiteRecord,
-    },
-    /// [`Event::PlanRequested`].
-    PlanRequested {
-        /// The request.
-        request: PlanRequest,
-    },
-    /// [`Event::CancelRequested`].
-    CancelRequested {
-        /// Plan id.
-        plan_id: String,
-    },
-    /// [`Event::JobProgress`].
-    JobProgress {
-        /// Plan id.
-        plan_id: String,
-        /// Fraction done.
-        #[serde(with = "lossless_f64")]
-        progress: f64,
-    },
-    /// [`Event::JobRegionReady`].
-    JobRegionReady {
-        /// Plan id.
-        plan_id: String,
-        /// The region and its cover path.
-        region: RegionReady,
-    },
-    /// [`Event::JobFinished`].
-    JobFinished {
-        /// Plan id.
-        plan_id: String,
-        /// How.
-        outcome: RecordedOutcome,
-    },
-    /// [`Event::RobotLiveliness`].
-    RobotLiveliness {
-        /// Robot id.
-        robot: String,
-        /// Token present.
-        alive: bool,
-    },
-    /// [`Event::RobotPose`].
-    RobotPose {
-        /// Robot id.
-        robot: String,
-        /// Its pose, map frame.
-        pose: RecordedPose,
-    },
-    /// [`Event::AssignPlan`].
-    AssignPlan {
-        /// Plan id.
-        plan_id: String,
-        /// Robot id.
-        robot: String,
-        /// The document assigned.
-        doc: Box<PlanDocument>,
-    },
-    /// [`Event::MapChanged`].
-    MapChanged {
-        /// Site.
-        site: String,
-        /// Lower corner (x, y), metres.
-        min: [f64; 2],
-        /// Upper corner (x, y), metres.
-        max: [f64; 2],
-    },
-    /// [`Event::CheckFinished`]: the check's result as computed live, so a replay needs no live map.
-    CheckFinished {
-        /// Robot checked.
-        robot: String,
-        /// Plan it drove.
-        plan_id: String,
-        /// Version checked.
-        base_version: u64,
-        /// What the check found.
-        outcome: crate::watch::CheckOutcome,
-        /// Check time, microseconds.
-        compute_us: u64,
-    },
-    /// [`Event::Shutdown`].
-    Shutdown,
-}
-
-impl From<&Event> for RecordedEvent {
-    fn from(e: &Event) -> Self {
-        match e {
-            Event::Restore { sites, plans } => Self::Restore {
-                sites: sites.iter().map(|(r, _)| r.clone()).collect(),
-                plans: plans.clone(),
-            },
-            Event::MapUploaded { record, .. } => Self::MapUploaded { record: record.clone() },
-            Event::PlanRequested(request) => Self::PlanRequested {
-                request: request.clone(),
-            },
-            Event::CancelRequested { plan_id } => Self::CancelRequested {
-                plan_id: plan_id.clone(),
-            },
-            Event::JobProgress { plan_id, progress } => Self::JobProgress {
-                plan_id: plan_id.clone(),
-                progress: *progress,
-            },
-            Event::JobRegionReady { plan_id, region } => Self::JobRegionReady {
-                plan_id: plan_id.clone(),
-                region: region.clone(),
-            },
-            Event::JobFinished { plan_id, outcome } => Self::JobFinished {
-                plan_id: plan_id.clone(),
-                outcome: match outcome {
-                    JobOutcome::Planned { doc, warnings } => RecordedOutcome::Planned {
-                        doc: Box::new((**doc).clone()),
-                        warnings: warnings.clone(),
-                    },
-                    JobOutcome::Failed(reason) => RecordedOutcome::Failed { reason: reason.clone() },
-                    JobOutcome::Cancelled => RecordedOutcome::Cancelled,
-                    JobOutcome::Interrupted => RecordedOutcome::Interrupted,
-                },
-            },
-            Event::RobotLiveliness { robot, alive } => Self::RobotLiveliness {
-                robot: robot.clone(),
-                alive: *alive,
-            },
-            Event::RobotPose { robot, pose } => Self::RobotPose {
-                robot: robot.clone(),
-                pose: RecordedPose {
-                    x: pose.x,
-                    y: pose.y,
-                    yaw: pose.yaw,
-                    stamp_ns: pose.stamp_ns,
-                },
-            },
-            Event::AssignPlan { plan_id, robot, doc } => Self::AssignPlan {
-                plan_id: plan_id.clone(),
-                robot: robot.clone(),
-                doc: Box::new((**doc).clone()),
-            },
-            Event::MapChanged { site, min, max } => Self::MapChanged {
-                site: site.clone(),
-                min: *min,
-                max: *max,
-            },
-            Event::CheckFinished {
-                robot,
-                plan_id,
-                base_version,
-                outcome,
-                compute_us,
-            } => Self::CheckFinished {
-                robot: robot.clone(),
-                plan_id: plan_id.clone(),
-                base_version: *base_version,
-                outcome: outcome.clone(),
-                compute_us: *compute_us,
-            },
-            Event::Shutdown => Self::Shutdown,
+impl RecordedEngineConfig {
+    /// The configuration of the engine that made the recording.
+    pub fn engine_config(&self) -> crate::EngineConfig {
+        let defaults = crate::EngineConfig::default();
+        crate::EngineConfig {
+            workers: self.workers,
+            queue_capacity: self.queue_capacity,
+            watch: self.watch,
+            default_site: self.default_site.clone(),
+            blind_after_ms: self.blind_after_ms.unwrap_or(defaults.blind_after_ms),
+            progress: defaults.progress,
         }
     }
-}
 
-impl RecordedEvent {
-    /// The event again; maps are re-parsed from their sources (an error if one no longer parses).
-    pub fn into_event(self) -> Result<Event> {
-        Ok(match self {
-            Self::Restore { sites, plans } => Event::Restore {
-                sites: sites
-                    .into_iter()
-                    .map(|r| {
-                        let map = r.source.parse()?;
-                        Ok::<_, EngineError>((r, map))
-                    })
-                    .collect::<Result<_>>()?,
-                plans,
-            },
-            Self::MapUploaded { record } => {
-                let map = record.source.parse()?;
-                Event::MapUploaded { record, map }
-            }
-            Self::PlanRequested { request } => Event::PlanRequested(request),
-            Self::CancelRequested { plan_id } => Event::CancelRequested { plan_id },
-            Self::JobProgress { plan_id, progress } => Event::JobProgress { plan_id, progress },
-            Self::JobRegionReady { plan_id, region } => Event::JobRegionReady { plan_id, region },
-            Self::JobFinished { plan_id, outcome } => Event::JobFinished {
-                plan_id,
-                outcome: match outcome {
-                    RecordedOutcome::Planned { doc, warnings } => JobOutcome::Planned {
-                        doc: Arc::from(doc),
-                        warnings,
-                    },
-                    RecordedOutcome::Failed { reason } => JobOutcome::Failed(reason),
-                    RecordedOutcome::Cancelled => JobOutcome::Cancelled,
-                    RecordedOutcome::Interrupted => JobOutcome::Interrupted,
-                },
-            },
-            Self::RobotLiveliness { robot, alive } => Event::RobotLiveliness { robot, alive },
-            Self::RobotPose { robot, pose } => Event::RobotPose {
-                robot,
-                pose: Pose2 {
-                    x: pose.x,
-                    y: pose.y,
-                    yaw: pose.yaw,
-                    stamp_ns: pose.stamp_ns,
-                },
-            },
-            Self::AssignPlan { plan_id, robot, doc } => Event::AssignPlan {
-                plan_id,
-                robot,
-                doc: Arc::from(doc),
-            },
-            Self::MapChanged { site, min, max } => Event::MapChanged { site, min, max },
-            Self::CheckFinished {
-                robot,
-                plan_id,
-                base_version,
-                outcome,
-                compute_us,
-            } => Event::CheckFinished {
-                robot,
-                plan_id,
-                base_version,
-                outcome,
-                compute_us,
-            },
-            Self::Shutdown => Event::Shutdown,
-        })
+    /// What a recording of `config` made by run `run` starts with.
+    pub fn of(run: u64, config: &crate::EngineConfig) -> Self {
+        Self {
+            run,
+            workers: config.workers,
+            queue_capacity: config.queue_capacity,
+            watch: config.watch,
+            default_site: config.default_site.clone(),
+            blind_after_ms: Some(config.blind_after_ms),
+            format: FORMAT,
+        }
     }
 }
 
@@ -437,6 +203,50 @@ pub enum Decision {
         /// Version it produces.
         version: u64,
     },
+    /// [`Command::FeedSite`]: where a robot's sensor data goes.
+    FeedSite {
+        /// Robot.
+        robot: String,
+        /// Its plan's site (`None`: the default site).
+        site: Option<String>,
+    },
+}
+
+impl Decision {
+    /// This decision as a recording of `format` holds it: `None` when that format had no such decision. See
+    /// the module docs.
+    pub fn as_format(&self, format: u32) -> Option<Self> {
+        if format >= FORMAT {
+            return Some(self.clone());
+        }
+        let status_v1 = |s: &PlanStatusResponse| PlanStatusResponse {
+            corrections: 0,
+            watch: None,
+            progress_jumps: Vec::new(),
+            ..s.clone()
+        };
+        let view_v1 = |v: &RobotView| RobotView {
+            site: None,
+            sensors: None,
+            ..v.clone()
+        };
+        Some(match self {
+            Self::FeedSite { .. } => return None,
+            Self::PlanStatus { status } => Self::PlanStatus {
+                status: status_v1(status),
+            },
+            Self::PlanUpdate { status } => Self::PlanUpdate {
+                status: status_v1(status),
+            },
+            Self::Robot { view } => Self::Robot { view: view_v1(view) },
+            Self::Publish {
+                event: PlanEvent::Status(status),
+            } => Self::Publish {
+                event: PlanEvent::Status(status_v1(status)),
+            },
+            other => other.clone(),
+        })
+    }
 }
 
 impl From<&Command> for Decision {
@@ -486,6 +296,10 @@ impl From<&Command> for Decision {
                 plan_id: c.plan_id.clone(),
                 version: c.version,
             },
+            Command::FeedSite { robot, site } => Self::FeedSite {
+                robot: robot.clone(),
+                site: site.clone(),
+            },
         }
     }
 }
@@ -498,50 +312,18 @@ pub fn decisions_of(result: &Result<Vec<Command>>) -> Vec<Decision> {
     }
 }
 
-/// `f64` as a JSON number when finite, else as `"NaN"`, `"inf"` or `"-inf"` (plain serde_json writes `null`,
-/// which does not read back).
-mod lossless_f64 {
-    use serde::{Deserialize, Deserializer, Serializer};
-
-    pub fn serialize<S: Serializer>(v: &f64, s: S) -> Result<S::Ok, S::Error> {
-        if v.is_finite() {
-            s.serialize_f64(*v)
-        } else if v.is_nan() {
-            s.serialize_str("NaN")
-        } else if *v > 0.0 {
-            s.serialize_str("inf")
-        } else {
-            s.serialize_str("-inf")
-        }
-    }
-
-    #[derive(Deserialize)]
-    #[serde(untagged)]
-    enum NumOrText {
-        Num(f64),
-        Text(String),
-    }
-
-    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
-        match NumOrText::deserialize(d)? {
-            NumOrText::Num(v) => Ok(v),
-            NumOrText::Text(t) => match t.as_str() {
-                "NaN" => Ok(f64::NAN),
-                "inf" => Ok(f64::INFINITY),
-                "-inf" => Ok(f64::NEG_INFINITY),
-                other => Err(serde::de::Error::custom(format!("not a number: {other:?}"))),
-            },
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use shift_proto::{PlanMetricsDoc, RobotSpec, WaypointDoc, WaypointKindDoc};
 
+    use std::sync::Arc;
+
+    use shift_proto::{PlanDocument, PlanRequest, RegionReady};
+
     use super::*;
-    use crate::site::MapSource;
-    use crate::{Engine, EngineConfig};
+    use crate::robots::Pose2;
+    use crate::site::{LoadedSite, MapSource, SiteRecord};
+    use crate::{Engine, EngineConfig, JobOutcome};
 
     fn doc(plan_id: &str) -> PlanDocument {
         PlanDocument {
@@ -578,8 +360,7 @@ mod tests {
     }
 
     fn inputs() -> Vec<Event> {
-        let record = site();
-        let map = record.source.parse().expect("map parses");
+        let site = LoadedSite::parse(site()).expect("map parses");
         let request = PlanRequest {
             site: "s".into(),
             start: [0.25, 0.25],
@@ -595,16 +376,20 @@ mod tests {
             options: None,
         };
         vec![
-            Event::MapUploaded { record, map },
+            Event::MapUploaded { site },
             Event::RobotLiveliness {
                 robot: "r1".into(),
                 alive: true,
             },
-            Event::PlanRequested(request.clone()),
-            Event::PlanRequested(PlanRequest {
-                site: "nowhere".into(),
-                ..request
-            }),
+            Event::PlanRequested {
+                request: request.clone(),
+            },
+            Event::PlanRequested {
+                request: PlanRequest {
+                    site: "nowhere".into(),
+                    ..request
+                },
+            },
             Event::JobProgress {
                 plan_id: "p-1".into(),
                 progress: 0.1 + 0.2,
@@ -666,7 +451,7 @@ mod tests {
                 run: 1,
                 seq,
                 now_ms,
-                event: RecordedEvent::from(&e),
+                event: e.clone(),
             };
             recorded.push(serde_json::to_string(&input).expect("input serialises"));
             let result = engine.handle(e, now_ms);
@@ -688,7 +473,7 @@ mod tests {
             .iter()
             .map(|t| {
                 let input: RecordedInput = serde_json::from_str(t).expect("input reads back");
-                input.event.into_event().expect("event rebuilds")
+                input.event
             })
             .collect();
         let (again, decided_again) = run(replayed);
@@ -708,7 +493,7 @@ mod tests {
 
     #[test]
     fn non_finite_numbers_survive_json() {
-        let pose = RecordedPose {
+        let pose = Pose2 {
             x: f64::NAN,
             y: f64::NEG_INFINITY,
             yaw: f64::INFINITY,
@@ -716,8 +501,8 @@ mod tests {
         };
         let text = serde_json::to_string(&pose).expect("json");
         assert_eq!(text, r#"{"x":"NaN","y":"-inf","yaw":"inf","stamp_ns":-1}"#);
-        let back: RecordedPose = serde_json::from_str(&text).expect("reads back");
+        let back: Pose2 = serde_json::from_str(&text).expect("reads back");
         assert!(back.x.is_nan() && back.y == f64::NEG_INFINITY && back.yaw == f64::INFINITY);
-        assert!(serde_json::from_str::<RecordedPose>(r#"{"x":"one","y":0,"yaw":0,"stamp_ns":0}"#).is_err());
+        assert!(serde_json::from_str::<Pose2>(r#"{"x":"one","y":0,"yaw":0,"stamp_ns":0}"#).is_err());
     }
 }

@@ -86,11 +86,54 @@ pub struct SiteRecord {
     pub updated_ms: u64,
 }
 
+/// A site's record with its parsed map, as events carry it. In a recording it is the record alone: reading
+/// one back parses the map again, with the code the daemon uses.
+#[derive(Debug, Clone)]
+pub struct LoadedSite {
+    /// What the store keeps.
+    pub record: SiteRecord,
+    /// The parsed map.
+    pub map: SiteMap,
+}
+
+impl LoadedSite {
+    /// Parses `record`'s map.
+    pub fn parse(record: SiteRecord) -> Result<Self> {
+        let map = record.source.parse()?;
+        Ok(Self { record, map })
+    }
+}
+
+impl Serialize for LoadedSite {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        self.record.serialize(s)
+    }
+}
+
+impl<'de> Deserialize<'de> for LoadedSite {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        let record = SiteRecord::deserialize(d)?;
+        Self::parse(record).map_err(serde::de::Error::custom)
+    }
+}
+
 /// A site held by the engine.
 #[derive(Debug, Clone)]
 pub(crate) struct Site {
     pub record: SiteRecord,
     pub map: SiteMap,
+    /// Last time robots' points reached its live map, milliseconds since the Unix epoch (0 = never).
+    pub last_fed_ms: u64,
+}
+
+impl From<LoadedSite> for Site {
+    fn from(s: LoadedSite) -> Self {
+        Self {
+            record: s.record,
+            map: s.map,
+            last_fed_ms: 0,
+        }
+    }
 }
 
 impl Site {

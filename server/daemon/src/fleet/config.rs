@@ -3,6 +3,8 @@
 
 use serde::Deserialize;
 use shift_engine::PoseHistoryParams;
+use shift_engine::sensors::SensorParams;
+use shift_engine::sensors::geometry::SensorOffset;
 use shift_proto::keys::Ros2Mapping;
 
 /// `[zenoh]` of the config file.
@@ -21,10 +23,20 @@ pub struct ZenohConfig {
     pub prefix: String,
     /// Fleet name, second segment (`default`).
     pub fleet: String,
-    /// Site whose live map this fleet's clouds feed.
+    /// The default site of unassigned robots: a robot's clouds and scans feed the site of the plan it is
+    /// assigned; a robot with no plan feeds this site, or, when empty, its points are dropped and counted
+    /// (`unrouted`).
     pub site: String,
     /// Frame the clouds' points are in when they need no transform.
     pub map_frame: String,
+    /// Odometry frames besides `map_frame` whose poses are taken as map-frame poses (a robot localised in the
+    /// map that names its frame `odom`); odometry in any other frame is reported and not used.
+    pub pose_frames: Vec<String>,
+    /// Longest a scan or cloud newer than the robot's newest odometry waits for the odometry that places it,
+    /// milliseconds.
+    pub sensor_wait_ms: u64,
+    /// Most scans and clouds waiting for odometry per robot (the oldest goes first).
+    pub sensor_wait_max: usize,
     /// Obstacle height band in the map frame for 3-D clouds, metres.
     pub obstacle_z_min_m: f64,
     /// Upper end of the band, metres.
@@ -70,6 +82,9 @@ impl Default for ZenohConfig {
             fleet: "default".into(),
             site: "demo".into(),
             map_frame: "map".into(),
+            pose_frames: vec!["odom".into()],
+            sensor_wait_ms: 500,
+            sensor_wait_max: 32,
             obstacle_z_min_m: 0.05,
             obstacle_z_max_m: 2.0,
             voxel_m: 0.05,
@@ -105,16 +120,38 @@ impl ZenohConfig {
 }
 
 impl ZenohConfig {
+    /// The default site of unassigned robots (`None` when `site` is empty).
+    pub fn default_site(&self) -> Option<String> {
+        (!self.site.is_empty()).then(|| self.site.clone())
+    }
+
+    /// How the sensor pipeline places and routes this fleet's data.
+    pub fn sensor_params(&self) -> SensorParams {
+        SensorParams {
+            map_frame: self.map_frame.clone(),
+            pose_frames: self.pose_frames.clone(),
+            history: self.pose_history(),
+            scan_offset: SensorOffset {
+                x_m: self.scan_offset_x_m,
+                y_m: self.scan_offset_y_m,
+                yaw_rad: self.scan_offset_yaw_rad,
+            },
+            wait_ms: self.sensor_wait_ms.min(60_000),
+            wait_max: self.sensor_wait_max.clamp(1, 4096),
+            default_site: self.default_site(),
+        }
+    }
+
     /// The zenoh configuration: mode, endpoints, scouting off.
-    pub fn to_zenoh(&self) -> anyhow::Result<zenoh::Config> {
+    pub fn to_zenoh(&self) -> crate::error::Result<zenoh::Config> {
         if self.mode != "peer" && self.mode != "client" {
-            anyhow::bail!("zenoh.mode must be \"peer\" or \"client\", got {:?}", self.mode);
+            crate::bail!("zenoh.mode must be \"peer\" or \"client\", got {:?}", self.mode);
         }
         let list = |v: &[String]| serde_json::to_string(v).unwrap_or_else(|_| "[]".into());
         let mut c = zenoh::Config::default();
         let set = |c: &mut zenoh::Config, k: &str, v: &str| {
             c.insert_json5(k, v)
-                .map_err(|e| anyhow::anyhow!("zenoh config {k} = {v}: {e}"))
+                .map_err(|e| crate::err!("zenoh config {k} = {v}: {e}"))
         };
         set(&mut c, "mode", &format!("{:?}", self.mode))?;
         set(&mut c, "listen/endpoints", &list(&self.listen))?;

@@ -1,33 +1,33 @@
-//! Sensor ingest off the async workers: each robot's clouds and scans wait in small queues (one per robot and
-//! stream) that drop the oldest when full (a flood never grows memory, and the newest view of the world wins);
-//! one named thread decodes them, moves them into the map frame, and inserts them into the site's live map.
+//! Sensor ingest off the async workers: the adapter between the Zenoh subscriptions and the engine's
+//! [`SensorHub`] (which decides where every message goes: see `shift_engine::sensors`).
 //!
-//! Poses: the odometry path feeds a short per-robot [`PoseHistory`]. A LaserScan is placed with the pose
-//! interpolated at its stamp (a stamp outside the history, beyond the tolerance, drops the scan: `too_old`,
-//! `future`, `no_pose`; an unstamped scan, stamp 0, takes the latest pose); a robot-frame cloud uses the pose at its stamp when the history covers it and the
-//! latest pose otherwise; map-frame clouds need no pose. Malformed payloads are counted and logged at most once
-//! a second; they never stop the thread.
+//! Odometry waits in one queue, clouds and scans in small queues per robot and stream that drop the oldest when
+//! full (a flood never grows memory, and the newest view of the world wins). One named thread (`ingest`) takes
+//! odometry first, then clouds and scans robots in turn; hands each to the hub; forwards accepted poses to the
+//! engine loop; inserts placed points into their site's live map and tells the engine loop where new obstacle
+//! points landed ([`Event::MapChanged`]) and that the site is fed ([`Event::SiteFed`], at most once a second per
+//! site); counts and logs drops (at most one line a second, plus the first `unrouted` and `frame` drop of each
+//! robot). Messages waiting in the hub for their pose are dropped at their deadline even when nothing else comes.
 
 use std::collections::{HashMap, VecDeque};
 use std::sync::atomic::Ordering;
 use std::sync::{Arc, Condvar, Mutex};
-use std::time::{Instant, SystemTime, UNIX_EPOCH};
+use std::time::{Duration, Instant};
 
-use shift_engine::{LiveMapParams, Pose2, PoseHistory, PoseHistoryParams};
+use shift_engine::sensors::{DropReason, Dropped, FramedPose, Outcome, Placed, SensorHub};
+use shift_engine::{Event, LiveMapParams, LiveMaps};
 use shift_proto::keys::Stream;
-use shift_proto::ros::Header;
-use shift_proto::ros::laser_scan::decode_laser_scan;
-use shift_proto::ros::point_cloud2::decode_cloud_xyz;
 
-use shift_engine::Event;
-
-use super::live::LiveMaps;
-use super::scan::{SensorOffset, scan_to_map};
-use crate::brain::{BrainHandle, Msg, now_ms};
+use crate::clock::SharedClock;
+use crate::engine_loop::handle::{EngineHandle, Msg};
 use crate::views::Views;
 
 /// How often the live map's horizon is enforced, milliseconds.
 const EXPIRE_EVERY_MS: u64 = 5_000;
+/// The engine hears that a site is fed at most this often, milliseconds.
+const FED_EVERY_MS: u64 = 1_000;
+/// Odometry messages waiting at most (all robots); beyond, the oldest is dropped.
+const ODOM_QUEUE: usize = 4_096;
 
 /// One cloud or scan as received.
 #[derive(Debug)]
@@ -47,116 +47,90 @@ type QueueKey = (String, Stream);
 
 #[derive(Debug, Default)]
 struct Queues {
+    odom: VecDeque<(String, FramedPose)>,
     per_robot: HashMap<QueueKey, VecDeque<RawCloud>>,
     ready: VecDeque<QueueKey>,
     stop: bool,
 }
 
-/// Where and how the ingest thread writes.
-#[derive(Debug, Clone)]
-pub struct IngestSettings {
-    /// Messages waiting per robot and stream.
-    pub capacity: usize,
-    /// Site whose live map is fed.
-    pub site: String,
-    /// Clouds in this frame (or none) need no transform.
-    pub map_frame: String,
-    /// The live map's knobs.
-    pub params: LiveMapParams,
-    /// Per-robot odometry history.
-    pub history: PoseHistoryParams,
-    /// The laser in the robot frame.
-    pub scan_offset: SensorOffset,
-}
-
-/// Why a message did not reach the map (the metric label and a message for the log).
-#[derive(Debug)]
-struct Dropped {
-    reason: &'static str,
-    detail: String,
-}
-
-impl Dropped {
-    fn new(reason: &'static str, detail: impl Into<String>) -> Self {
-        Self {
-            reason,
-            detail: detail.into(),
-        }
-    }
+/// What the thread takes next.
+enum Work {
+    Odom(String, FramedPose),
+    Sensor(RawCloud),
+    /// Nothing came before the hub's next deadline.
+    Tick,
 }
 
 fn stream_label(stream: Stream) -> &'static str {
     match stream {
         Stream::Scan => "scan",
+        Stream::Odom => "odom",
         _ => "cloud",
     }
 }
 
-/// The queues and the thread's settings.
+/// The queues, the hub and where placed points go.
 #[derive(Debug)]
 pub struct Ingest {
     queues: Mutex<Queues>,
     wake: Condvar,
-    settings: IngestSettings,
-    poses: Mutex<HashMap<String, PoseHistory>>,
+    capacity: usize,
+    params: LiveMapParams,
+    hub: Arc<Mutex<SensorHub>>,
     views: Arc<Views>,
     live: Arc<LiveMaps>,
-    /// Told where new obstacle points landed (path watching).
-    brain: Option<BrainHandle>,
-}
-
-/// Wall-clock nanoseconds since the Unix epoch.
-fn wall_ns() -> i64 {
-    SystemTime::now()
-        .duration_since(UNIX_EPOCH)
-        .map_or(0, |d| i64::try_from(d.as_nanos()).unwrap_or(i64::MAX))
+    engine: Option<EngineHandle>,
+    clock: SharedClock,
+    fed_ms: Mutex<HashMap<String, u64>>,
 }
 
 impl Ingest {
-    /// Settings for the thread.
-    pub fn new(settings: IngestSettings, views: Arc<Views>, live: Arc<LiveMaps>, brain: Option<BrainHandle>) -> Self {
+    /// An ingest of `capacity` messages per robot and stream into `live`, placing through `hub`.
+    pub fn new(
+        capacity: usize,
+        params: LiveMapParams,
+        hub: Arc<Mutex<SensorHub>>,
+        views: Arc<Views>,
+        live: Arc<LiveMaps>,
+        engine: Option<EngineHandle>,
+        clock: SharedClock,
+    ) -> Self {
         Self {
             queues: Mutex::new(Queues::default()),
             wake: Condvar::new(),
-            settings: IngestSettings {
-                capacity: settings.capacity.max(1),
-                ..settings
-            },
-            poses: Mutex::new(HashMap::new()),
+            capacity: capacity.max(1),
+            params,
+            hub,
             views,
             live,
-            brain,
+            engine,
+            clock,
+            fed_ms: Mutex::new(HashMap::new()),
         }
     }
 
-    /// Adds an odometry pose (map frame, robot clock) to the robot's history.
-    pub fn push_pose(&self, robot: &str, pose: Pose2) {
-        let Ok(mut poses) = self.poses.lock() else { return };
-        match poses.get_mut(robot) {
-            Some(h) => h.push(pose),
-            None => {
-                let mut h = PoseHistory::new(self.settings.history);
-                h.push(pose);
-                poses.insert(robot.to_owned(), h);
-            }
+    /// Queues an odometry pose (the frame it names is checked by the hub).
+    pub fn push_odom(&self, robot: String, pose: FramedPose) {
+        let Ok(mut q) = self.queues.lock() else { return };
+        let full = q.odom.len() >= ODOM_QUEUE;
+        if full {
+            q.odom.pop_front();
         }
-    }
-
-    fn count_drop(&self, stream: Stream, reason: &'static str) {
-        metrics::counter!("shift_ingest_dropped_total", "reason" => reason, "stream" => stream_label(stream))
-            .increment(1);
-        if let Some(live) = self.live.get(&self.settings.site) {
-            live.dropped.fetch_add(1, Ordering::Relaxed);
+        q.odom.push_back((robot, pose));
+        drop(q);
+        if full {
+            metrics::counter!("shift_odom_dropped_total", "reason" => "queue_full").increment(1);
         }
+        self.wake.notify_one();
     }
 
     /// Queues a cloud or scan; drops the oldest of its robot and stream when that queue is full.
     pub fn push(&self, cloud: RawCloud) {
         let Ok(mut q) = self.queues.lock() else { return };
         let key = (cloud.robot.clone(), cloud.stream);
-        let stream = cloud.stream;
+        let (robot, stream) = (cloud.robot.clone(), cloud.stream);
         let queue = q.per_robot.entry(key.clone()).or_default();
-        let full = queue.len() >= self.settings.capacity;
+        let full = queue.len() >= self.capacity;
         if full {
             queue.pop_front();
         }
@@ -166,7 +140,15 @@ impl Ingest {
         }
         drop(q);
         if full {
-            self.count_drop(stream, "queue_full");
+            let detail = format!("more than {} messages queued", self.capacity);
+            let dropped = self
+                .hub
+                .lock()
+                .ok()
+                .map(|mut h| h.record_drop(&robot, stream, DropReason::QueueFull, detail));
+            if let Some(d) = dropped {
+                self.count_drop(&d);
+            }
         }
         self.wake.notify_one();
     }
@@ -179,10 +161,14 @@ impl Ingest {
         self.wake.notify_all();
     }
 
-    /// Takes the next cloud, robots in turn; `None` when stopped and empty.
-    fn next(&self) -> Option<RawCloud> {
+    /// Takes the next message (odometry first, then robots in turn), or [`Work::Tick`] at the hub's next
+    /// deadline; `None` when stopped and empty.
+    fn next(&self) -> Option<Work> {
         let mut q = self.queues.lock().ok()?;
         loop {
+            if let Some((robot, pose)) = q.odom.pop_front() {
+                return Some(Work::Odom(robot, pose));
+            }
             while let Some(key) = q.ready.pop_front() {
                 let Some(queue) = q.per_robot.get_mut(&key) else {
                     continue;
@@ -191,121 +177,139 @@ impl Ingest {
                     if !queue.is_empty() {
                         q.ready.push_back(key);
                     }
-                    return Some(c);
+                    return Some(Work::Sensor(c));
                 }
             }
             if q.stop {
                 return None;
             }
-            q = self.wake.wait(q).ok()?;
+            let deadline = self.hub.lock().ok().and_then(|h| h.next_deadline_ms());
+            match deadline {
+                Some(at) => {
+                    let wait = at.saturating_sub(self.clock.now_ms()).max(1);
+                    let (guard, timeout) = self.wake.wait_timeout(q, Duration::from_millis(wait)).ok()?;
+                    q = guard;
+                    if timeout.timed_out() {
+                        return Some(Work::Tick);
+                    }
+                }
+                None => q = self.wake.wait(q).ok()?,
+            }
         }
     }
 
     /// The thread's loop.
     pub fn run(&self) {
         let mut last_log: Option<Instant> = None;
-        while let Some(msg) = self.next() {
-            if let Err(d) = self.ingest(&msg) {
-                self.count_drop(msg.stream, d.reason);
-                if last_log.is_none_or(|t| t.elapsed().as_secs() >= 1) {
-                    tracing::warn!(
-                        robot = msg.robot,
-                        stream = stream_label(msg.stream),
-                        reason = d.reason,
-                        "sensor message dropped: {}",
-                        d.detail
-                    );
-                    last_log = Some(Instant::now());
+        while let Some(work) = self.next() {
+            let now = self.clock.now_ms();
+            let outcomes = match work {
+                Work::Odom(robot, pose) => self.odometry(&robot, pose, now),
+                Work::Sensor(msg) => {
+                    // The hub sees it at the time it arrived: its wait for a pose and the latency figures count
+                    // from there.
+                    let received_ms = now.saturating_sub(msg.received.elapsed().as_millis() as u64);
+                    self.hub
+                        .lock()
+                        .map(|mut h| h.sensor(&msg.robot, msg.stream, &msg.bytes, received_ms))
+                        .unwrap_or_default()
+                }
+                Work::Tick => Vec::new(),
+            };
+            let expired = self.hub.lock().map(|mut h| h.expire(now)).unwrap_or_default();
+            for outcome in outcomes.into_iter().chain(expired) {
+                match outcome {
+                    Outcome::Placed(p) => {
+                        if let Err(d) = self.insert(p, now) {
+                            self.count_drop(&d);
+                            self.log_drop(&d, &mut last_log);
+                        }
+                    }
+                    Outcome::Dropped(d) => {
+                        self.count_drop(&d);
+                        self.log_drop(&d, &mut last_log);
+                    }
                 }
             }
         }
     }
 
-    /// The robot's pose at `stamp_ns` from its odometry history.
-    fn pose_at(&self, robot: &str, stamp_ns: i64) -> Result<Pose2, Dropped> {
-        let poses = self
-            .poses
-            .lock()
-            .map_err(|_| Dropped::new("internal", "pose lock poisoned"))?;
-        let h = poses.get(robot);
-        if stamp_ns == 0 {
-            // Unstamped: the latest pose is the best there is.
-            return h
-                .and_then(PoseHistory::latest)
-                .ok_or_else(|| Dropped::new("no_pose", format!("no odometry from {robot} yet")));
-        }
-        h.map_or(Err(shift_engine::PoseLookupError::Empty), |h| h.at(stamp_ns))
-            .map_err(|e| Dropped::new(e.kind(), format!("{robot}: {e}")))
-    }
-
-    /// A cloud's points in the map frame (3-D: the height band applies).
-    fn cloud_points(&self, msg: &RawCloud) -> Result<(Header, Vec<[f64; 3]>), Dropped> {
-        let xyz = decode_cloud_xyz(&msg.bytes).map_err(|e| Dropped::new("malformed", e.to_string()))?;
-        let frame = xyz.header.frame_id.trim_start_matches('/');
-        if frame.is_empty() || frame == self.settings.map_frame {
-            return Ok((xyz.header, xyz.points));
-        }
-        // Robot-frame points: the pose at the stamp when the history has it, else the latest one.
-        let stamp = xyz.header.stamp.to_ns();
-        let pose = self
-            .pose_at(&msg.robot, stamp)
-            .ok()
-            .or_else(|| {
-                let poses = self.poses.lock().ok()?;
-                poses.get(&msg.robot).and_then(PoseHistory::latest)
-            })
-            .or_else(|| {
-                self.views.robot(&msg.robot).and_then(|r| r.pose).map(|p| Pose2 {
-                    x: p.x,
-                    y: p.y,
-                    yaw: p.yaw,
-                    stamp_ns: p.stamp_ns,
-                })
-            })
-            .ok_or_else(|| {
-                Dropped::new(
-                    "no_pose",
-                    format!("points in frame {frame:?} but no odometry from {} yet", msg.robot),
-                )
-            })?;
-        let (s, c) = pose.yaw.sin_cos();
-        let points = xyz
-            .points
-            .iter()
-            .map(|p| [pose.x + c * p[0] - s * p[1], pose.y + s * p[0] + c * p[1], p[2]])
-            .collect();
-        Ok((xyz.header, points))
-    }
-
-    /// A scan's returns in the map frame (planar).
-    fn scan_points(&self, msg: &RawCloud) -> Result<(Header, Vec<[f64; 3]>), Dropped> {
-        let scan = decode_laser_scan(&msg.bytes).map_err(|e| Dropped::new("malformed", e.to_string()))?;
-        let pose = self.pose_at(&msg.robot, scan.header.stamp.to_ns())?;
-        let points = scan_to_map(&scan, pose, self.settings.scan_offset);
-        Ok((scan.header, points))
-    }
-
-    fn ingest(&self, msg: &RawCloud) -> Result<(), Dropped> {
-        let work = Instant::now();
-        let planar = msg.stream == Stream::Scan;
-        let (header, points) = if planar {
-            self.scan_points(msg)?
-        } else {
-            self.cloud_points(msg)?
+    /// Odometry → hub (history, waiting messages released) → engine (progress, checks).
+    fn odometry(&self, robot: &str, pose: FramedPose, now: u64) -> Vec<Outcome> {
+        let Ok(out) = self.hub.lock().map(|mut h| h.odometry(robot, pose, now)) else {
+            return Vec::new();
         };
-        let site = &self.settings.site;
-        let summary = self
-            .views
-            .site(site)
-            .ok_or_else(|| Dropped::new("no_map", format!("site {site:?} has no map")))?;
-        let live = self
-            .live
-            .get_or_create(&summary, self.settings.params)
-            .ok_or_else(|| Dropped::new("internal", "live map could not be created"))?;
-        let now = now_ms();
+        if let Some(d) = &out.rejected {
+            metrics::counter!("shift_odom_dropped_total", "reason" => d.reason.as_str()).increment(1);
+            if d.first {
+                tracing::warn!(robot, reason = d.reason.as_str(), "odometry not used: {}", d.detail);
+            }
+        }
+        if let (Some(pose), Some(engine)) = (out.pose, &self.engine) {
+            let event = Event::RobotPose {
+                robot: robot.to_owned(),
+                pose,
+            };
+            // Lossy under overload: the next pose supersedes a dropped one.
+            if engine.try_tell(Msg::event(event)).is_err() {
+                metrics::counter!("shift_odom_dropped_total", "reason" => "engine_busy").increment(1);
+            }
+        }
+        out.released
+    }
+
+    fn count_drop(&self, d: &Dropped) {
+        metrics::counter!("shift_ingest_dropped_total", "reason" => d.reason.as_str(), "stream" => stream_label(d.stream))
+            .increment(1);
+        let site = self
+            .hub
+            .lock()
+            .ok()
+            .and_then(|h| h.site_of(&d.robot).map(str::to_owned));
+        if let Some(live) = site.and_then(|s| self.live.get(&s)) {
+            live.dropped.fetch_add(1, Ordering::Relaxed);
+        }
+    }
+
+    fn log_drop(&self, d: &Dropped, last_log: &mut Option<Instant>) {
+        if d.first && matches!(d.reason, DropReason::Unrouted | DropReason::NoMap) {
+            // Once per robot: a configuration problem, not noise.
+            tracing::warn!(
+                robot = d.robot,
+                reason = d.reason.as_str(),
+                "sensor data goes nowhere: {}",
+                d.detail
+            );
+        } else if last_log.is_none_or(|t| t.elapsed().as_secs() >= 1) {
+            tracing::warn!(
+                robot = d.robot,
+                stream = stream_label(d.stream),
+                reason = d.reason.as_str(),
+                "sensor message dropped: {}",
+                d.detail
+            );
+            *last_log = Some(Instant::now());
+        }
+    }
+
+    /// Placed points into their site's live map.
+    fn insert(&self, p: Placed, now: u64) -> Result<(), Dropped> {
+        let work = Instant::now();
+        let no_map = |detail: String| {
+            self.hub
+                .lock()
+                .map(|mut h| h.record_drop(&p.robot, p.stream, DropReason::NoMap, detail.clone()))
+                .unwrap_or_else(|_| Dropped::internal(&p.robot, p.stream, detail))
+        };
+        let Some(summary) = self.views.site(&p.site) else {
+            return Err(no_map(format!("site {:?} has no map", p.site)));
+        };
+        let Some(live) = self.live.get_or_create(&summary, self.params) else {
+            return Err(no_map(format!("site {:?}: its live map could not be created", p.site)));
+        };
         let (report, points_in_map) = match live.map.write() {
             Ok(mut map) => {
-                let r = map.ingest(&points, planar, now);
+                let r = map.ingest(&p.points, p.planar, now);
                 // Forget what was not seen again within the horizon, at most every few seconds.
                 if now.saturating_sub(live.last_expire_ms.load(Ordering::Relaxed)) >= EXPIRE_EVERY_MS {
                     live.last_expire_ms.store(now, Ordering::Relaxed);
@@ -313,41 +317,60 @@ impl Ingest {
                 }
                 (r, map.stats().points)
             }
-            Err(_) => return Err(Dropped::new("internal", "live map lock poisoned")),
+            Err(_) => return Err(Dropped::internal(&p.robot, p.stream, "live map lock poisoned".into())),
         };
         live.mark_update(now);
-        if let (Some(brain), Some((min, max)), true) = (&self.brain, report.extent, report.inserted > 0) {
-            // Lossy: a dropped notice is caught by the next pose-triggered check.
-            let changed = Event::MapChanged {
-                site: self.settings.site.clone(),
-                min,
-                max,
-            };
-            if brain.try_tell(Msg::event(changed)).is_err() {
-                metrics::counter!("shift_map_change_dropped_total").increment(1);
+        if let Some(engine) = &self.engine {
+            if let (Some((min, max)), true) = (report.extent, report.inserted > 0) {
+                // Lossy: a dropped notice is caught by the next pose-triggered check.
+                let changed = Event::MapChanged {
+                    site: p.site.clone(),
+                    min,
+                    max,
+                };
+                if engine.try_tell(Msg::event(changed)).is_err() {
+                    metrics::counter!("shift_map_change_dropped_total").increment(1);
+                }
             }
+            self.tell_fed(engine, &p.site, now);
         }
         tracing::debug!(
-            robot = msg.robot,
-            stream = stream_label(msg.stream),
+            robot = p.robot,
+            site = p.site,
+            stream = stream_label(p.stream),
             offered = report.offered,
             inserted = report.inserted,
+            waited = p.waited,
             "sensor message ingested"
         );
-        let stream = stream_label(msg.stream);
+        let stream = stream_label(p.stream);
         metrics::counter!("shift_ingest_clouds_total", "stream" => stream).increment(1);
         metrics::counter!("shift_ingest_points_total", "stream" => stream).increment(report.offered as u64);
         metrics::histogram!("shift_ingest_work_seconds").record(work.elapsed().as_secs_f64());
-        metrics::histogram!("shift_ingest_latency_seconds").record(msg.received.elapsed().as_secs_f64());
+        metrics::histogram!("shift_ingest_latency_seconds").record(now.saturating_sub(p.received_ms) as f64 / 1e3);
         // Stamp to visible in the map (transport included; meaningful when the robot's clock is synchronised).
-        let stamp = header.stamp.to_ns();
-        if stamp > 0 {
-            let age = (wall_ns() - stamp) as f64 * 1e-9;
+        if p.stamp_ns > 0 {
+            let age = (now as f64 * 1e-3) - (p.stamp_ns as f64 * 1e-9);
             if age >= 0.0 {
                 metrics::histogram!("shift_ingest_stamp_age_seconds").record(age);
             }
         }
-        metrics::gauge!("shift_live_map_points", "site" => site.clone()).set(points_in_map as f64);
+        metrics::gauge!("shift_live_map_points", "site" => p.site.clone()).set(points_in_map as f64);
         Ok(())
+    }
+
+    /// Tells the engine the site's live map is fed, at most every [`FED_EVERY_MS`].
+    fn tell_fed(&self, engine: &EngineHandle, site: &str, now: u64) {
+        let Ok(mut fed) = self.fed_ms.lock() else { return };
+        let last = fed.get(site).copied().unwrap_or(0);
+        if now.saturating_sub(last) < FED_EVERY_MS {
+            return;
+        }
+        if engine
+            .try_tell(Msg::event(Event::SiteFed { site: site.to_owned() }))
+            .is_ok()
+        {
+            fed.insert(site.to_owned(), now);
+        }
     }
 }

@@ -1,7 +1,7 @@
 //! The robot data subscriptions of one fleet, laid out by its key mapping (`zenoh.mapping`: native DESIGN §5.4
 //! keys, zenoh-bridge-ros2dds or rmw_zenoh): one subscriber per key expression, every sample routed by the
-//! stream its key names — odometry to the engine (and the ingest pose history), clouds and scans to the ingest
-//! queues. rmw_zenoh's attachment (sequence number, source time, gid) is neither required nor used.
+//! stream its key names — odometry, clouds and scans to the ingest queues (odometry goes on to the engine loop
+//! from there, once the sensor pipeline took it into the robot's pose history). rmw_zenoh's attachment (sequence number, source time, gid) is neither required nor used.
 //!
 //! Robots without a SHIFT liveliness token (the ROS 2 mappings) are tracked by [`Presence`]: alive from their
 //! first message, lost after `zenoh.robot_timeout_s` without one.
@@ -9,7 +9,9 @@
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use anyhow::{Result, anyhow};
+use crate::err;
+use crate::error::Result;
+use shift_engine::sensors::FramedPose;
 use shift_engine::{Event, Pose2};
 use shift_proto::keys::{KeySpace, Ros2Mapping, Stream};
 use shift_proto::ros::odometry::decode_odom_payload;
@@ -18,16 +20,16 @@ use tokio_util::sync::CancellationToken;
 use zenoh::sample::Sample;
 
 use super::ingest::{Ingest, RawCloud};
-use super::next_or_stop;
 use super::presence::Presence;
-use crate::brain::{BrainHandle, Msg};
+use super::stopping::next_or_stop;
+use crate::engine_loop::handle::{EngineHandle, Msg};
 
 /// Where a fleet's samples go.
 #[derive(Clone)]
 struct Route {
     keys: Arc<KeySpace>,
     mapping: Ros2Mapping,
-    brain: BrainHandle,
+    engine: EngineHandle,
     ingest: Arc<Ingest>,
     presence: Option<Arc<Presence>>,
 }
@@ -45,7 +47,7 @@ impl Route {
                 robot: robot.clone(),
                 alive: true,
             };
-            if self.brain.try_tell(Msg::event(alive)).is_ok() {
+            if self.engine.try_tell(Msg::event(alive)).is_ok() {
                 tracing::info!(robot, "robot heard on its topics: alive");
                 p.reported_alive(&robot);
             }
@@ -62,7 +64,7 @@ impl Route {
         }
     }
 
-    /// Odometry → pose history and engine (lossy under overload: the next pose supersedes a dropped one).
+    /// Odometry → the ingest (the sensor pipeline's pose history, then the engine loop).
     fn odom(&self, robot: String, sample: &Sample) {
         let encoding = sample.encoding().to_string();
         match decode_odom_payload(&sample.payload().to_bytes(), Some(&encoding)) {
@@ -73,14 +75,13 @@ impl Route {
                     yaw: p.yaw,
                     stamp_ns: p.stamp_ns,
                 };
-                self.ingest.push_pose(&robot, pose);
-                if self
-                    .brain
-                    .try_tell(Msg::event(Event::RobotPose { robot, pose }))
-                    .is_err()
-                {
-                    metrics::counter!("shift_odom_dropped_total", "reason" => "engine_busy").increment(1);
-                }
+                self.ingest.push_odom(
+                    robot,
+                    FramedPose {
+                        pose,
+                        frame: p.frame_id,
+                    },
+                );
             }
             Err(e) => {
                 metrics::counter!("shift_odom_dropped_total", "reason" => "malformed").increment(1);
@@ -97,16 +98,16 @@ pub async fn data_subscriptions(
     keys: Arc<KeySpace>,
     mapping: &Ros2Mapping,
     robot_timeout: Duration,
-    brain: BrainHandle,
+    engine: EngineHandle,
     ingest: Arc<Ingest>,
     stop: &CancellationToken,
 ) -> Result<Vec<JoinHandle<()>>> {
-    mapping.validate().map_err(|e| anyhow!("zenoh.mapping: {e}"))?;
+    mapping.validate().map_err(|e| err!("zenoh.mapping: {e}"))?;
     let presence = (!mapping.has_liveliness()).then(|| Arc::new(Presence::new(robot_timeout)));
     let route = Route {
         keys: keys.clone(),
         mapping: mapping.clone(),
-        brain: brain.clone(),
+        engine: engine.clone(),
         ingest,
         presence: presence.clone(),
     };
@@ -115,7 +116,7 @@ pub async fn data_subscriptions(
         let sub = session
             .declare_subscriber(ke.as_str())
             .await
-            .map_err(|e| anyhow!("zenoh subscriber on {ke}: {e}"))?;
+            .map_err(|e| err!("zenoh subscriber on {ke}: {e}"))?;
         tracing::info!(key = %ke, ?stream, "subscribed");
         let (route, s) = (route.clone(), stop.clone());
         tasks.push(tokio::spawn(async move {
@@ -136,7 +137,7 @@ pub async fn data_subscriptions(
                 }
                 for robot in presence.expire(Instant::now()) {
                     tracing::info!(robot, "robot silent for robot_timeout_s: lost");
-                    let _ = brain
+                    let _ = engine
                         .tell(Msg::event(Event::RobotLiveliness { robot, alive: false }))
                         .await;
                 }

@@ -8,7 +8,7 @@ use axum::response::{IntoResponse, Response};
 use shift_engine::EngineError;
 use shift_proto::{ErrorBody, ErrorDetail};
 
-use crate::brain::BrainError;
+use crate::engine_loop::handle::LoopError;
 
 /// An error answer.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -93,12 +93,12 @@ impl From<EngineError> for ApiError {
     }
 }
 
-impl From<BrainError> for ApiError {
-    fn from(e: BrainError) -> Self {
+impl From<LoopError> for ApiError {
+    fn from(e: LoopError) -> Self {
         match e {
-            BrainError::Engine(e) => e.into(),
-            BrainError::Store(m) => Self::new(StatusCode::INTERNAL_SERVER_ERROR, "store", m),
-            BrainError::Stopped => Self::new(StatusCode::SERVICE_UNAVAILABLE, "shutting_down", e.to_string()),
+            LoopError::Engine(e) => e.into(),
+            LoopError::Store(m) => Self::new(StatusCode::INTERNAL_SERVER_ERROR, "store", m),
+            LoopError::Stopped => Self::new(StatusCode::SERVICE_UNAVAILABLE, "shutting_down", e.to_string()),
         }
     }
 }

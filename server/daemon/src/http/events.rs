@@ -143,6 +143,9 @@ mod tests {
             robot: None,
             driven_fraction: None,
             missed: Vec::new(),
+            corrections: 0,
+            watch: None,
+            progress_jumps: Vec::new(),
             created_ms: 0,
             updated_ms: 0,
         })

@@ -26,19 +26,26 @@ use tower_http::trace::TraceLayer;
 
 pub use openapi::ApiDoc;
 
-use crate::brain::BrainHandle;
-use crate::fleet::live::LiveMaps;
+use shift_engine::LiveMaps;
+use shift_engine::sensors::SensorHub;
+
+use crate::clock::SharedClock;
+use crate::engine_loop::handle::EngineHandle;
 use crate::views::Views;
 
 /// What handlers hold: channel handles and read snapshots.
 #[derive(Clone)]
 pub struct AppState {
-    /// The engine thread.
-    pub brain: BrainHandle,
+    /// The engine loop.
+    pub engine: EngineHandle,
     /// Read model of plans and sites.
     pub views: Arc<Views>,
     /// Live site maps (ikd-trees fed by the fleet).
     pub live: Arc<LiveMaps>,
+    /// The fleet's sensor pipeline (per-robot figures for `GET /v1/robots`).
+    pub sensors: Arc<std::sync::Mutex<SensorHub>>,
+    /// The time.
+    pub clock: SharedClock,
     /// Plan events, for SSE subscribers.
     pub events: broadcast::Sender<PlanEvent>,
     /// Cancelled on shutdown (ends event streams).

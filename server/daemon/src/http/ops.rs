@@ -20,7 +20,7 @@ pub async fn healthz() -> impl IntoResponse {
 #[utoipa::path(get, path = "/readyz", tag = "ops",
     responses((status = 200, description = "ready"), (status = 503, description = "not ready")))]
 pub async fn readyz(State(state): State<AppState>) -> Response {
-    if state.brain.is_alive() {
+    if state.engine.is_alive() {
         axum::Json(json!({"status": "ready", "store": "open", "engine": "running"})).into_response()
     } else {
         (

@@ -43,7 +43,7 @@ pub async fn create_plan(
     State(state): State<AppState>,
     ApiJson(request): ApiJson<PlanRequest>,
 ) -> Result<(StatusCode, HeaderMap, ApiJson<PlanAccepted>), ApiError> {
-    let reply = state.brain.call(Event::PlanRequested(request)).await?;
+    let reply = state.engine.call(Event::PlanRequested { request }).await?;
     let rec = reply
         .plans
         .into_iter()
@@ -122,7 +122,7 @@ pub async fn cancel_plan(
     State(state): State<AppState>,
     Path(id): Path<String>,
 ) -> Result<ApiJson<PlanStatusResponse>, ApiError> {
-    let reply = state.brain.call(Event::CancelRequested { plan_id: id }).await?;
+    let reply = state.engine.call(Event::CancelRequested { plan_id: id }).await?;
     let rec = reply
         .plans
         .into_iter()

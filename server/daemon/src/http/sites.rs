@@ -3,12 +3,11 @@
 use axum::body::Bytes;
 use axum::extract::{FromRequest, Multipart, Path, Request, State};
 use axum::http::{StatusCode, header};
-use shift_engine::{Event, MapSource, SiteRecord};
+use shift_engine::{Event, LoadedSite, MapSource, SiteRecord};
 use shift_proto::{ErrorBody, SiteSummary};
 
 use super::AppState;
 use super::error::{ApiError, ApiJson};
-use crate::brain::now_ms;
 
 /// Upload an occupancy map: multipart with parts `yaml` (map_server YAML) and `image` (PGM or PNG), or
 /// `Content-Type: application/json` with a nav_msgs/OccupancyGrid-shaped grid. Replaces the site's map.
@@ -71,18 +70,15 @@ pub async fn upload_map(
     };
     shift_engine::site::validate_site_name(&site)?;
     // Decoding a large image takes a while: off the async workers.
-    let parsed = {
-        let source = source.clone();
-        tokio::task::spawn_blocking(move || source.parse())
-            .await
-            .map_err(|_| ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, "internal", "map parser stopped"))??
-    };
     let record = SiteRecord {
         site,
         source,
-        updated_ms: now_ms(),
+        updated_ms: state.clock.now_ms(),
     };
-    let reply = state.brain.call(Event::MapUploaded { record, map: parsed }).await?;
+    let loaded = tokio::task::spawn_blocking(move || LoadedSite::parse(record))
+        .await
+        .map_err(|_| ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, "internal", "map parser stopped"))??;
+    let reply = state.engine.call(Event::MapUploaded { site: loaded }).await?;
     let summary = reply
         .sites
         .into_iter()
@@ -103,6 +99,6 @@ pub async fn get_site(
         .views
         .site(&site)
         .ok_or_else(|| ApiError::not_found(format!("unknown site {site:?}")))?;
-    state.live.annotate(&mut summary, now_ms());
+    state.live.annotate(&mut summary, state.clock.now_ms());
     Ok(ApiJson(summary))
 }

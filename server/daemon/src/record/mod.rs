@@ -9,7 +9,8 @@
 //! when more than `queue_bytes` wait — the message is dropped and counted (`shift_record_dropped_total`).
 //! Engine inputs are cloned (cheap: documents and grids are shared) and serialised on the writer thread.
 //!
-//! Hooks: [`input`] / [`output`] around `Engine::handle` in `brain.rs`; [`Recording::start`] and
+//! Hooks: [`Recorder::engine_input`] / [`Recorder::engine_output`] around `Engine::handle` in the engine loop
+//! (`engine_loop/mod.rs`); [`Recording::start`] and
 //! [`Recording::finish`] in `server.rs`. Ingested messages are tapped by subscribers of their own ([`tap`]), so
 //! the fleet bridge needs no change to be recorded.
 
@@ -26,9 +27,9 @@ use std::sync::mpsc::{Receiver, RecvTimeoutError, SyncSender, TrySendError, sync
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
-use anyhow::{Context, Result};
-use shift_engine::recorded::{Decision, RecordedDecisions, RecordedEngineConfig, RecordedEvent, RecordedInput};
-use shift_engine::{Command, EngineError, Event};
+use crate::error::{Context, Result};
+use shift_engine::recorded::{Decision, RecordedDecisions, RecordedEngineConfig, RecordedInput};
+use shift_engine::{Command, EngineConfig, EngineError, Event, LiveMaps};
 use shift_planner::map::grid::OccupancyGrid;
 use shift_proto::keys::KeySpace;
 use shift_proto::{PlanDocument, PlanEvent, PlanStatusResponse};
@@ -37,7 +38,7 @@ use tokio_util::sync::CancellationToken;
 
 use self::channels::Kind;
 use self::writer::{FileSettings, RotatingWriter};
-use crate::fleet::live::LiveMaps;
+use crate::clock::SharedClock;
 
 /// How often the writer thread wakes when idle (time rotation, grids), and how often it cuts a chunk so a
 /// crash loses at most this much.
@@ -174,8 +175,11 @@ impl Recorder {
     pub fn engine_input(&self, event: &Event, now_ms: u64) -> u64 {
         let seq = self.shared.seq.fetch_add(1, Ordering::Relaxed) + 1;
         let grids: Vec<(String, Arc<OccupancyGrid>)> = match event {
-            Event::MapUploaded { record, map } => vec![(record.site.clone(), map.grid.clone())],
-            Event::Restore { sites, .. } => sites.iter().map(|(r, m)| (r.site.clone(), m.grid.clone())).collect(),
+            Event::MapUploaded { site } => vec![(site.record.site.clone(), site.map.grid.clone())],
+            Event::Restore { sites, .. } => sites
+                .iter()
+                .map(|s| (s.record.site.clone(), s.map.grid.clone()))
+                .collect(),
             _ => Vec::new(),
         };
         if let Ok(mut p) = self.shared.pending_sites.lock() {
@@ -230,18 +234,6 @@ impl Recorder {
     }
 }
 
-/// Hook before `Engine::handle`: records the event; returns its sequence number (0 without a recorder).
-pub fn input(recorder: Option<&Recorder>, event: &Event, now_ms: u64) -> u64 {
-    recorder.map_or(0, |r| r.engine_input(event, now_ms))
-}
-
-/// Hook after `Engine::handle`: records its decisions for input `seq`.
-pub fn output(recorder: Option<&Recorder>, seq: u64, now_ms: u64, result: &Result<Vec<Command>, EngineError>) {
-    if let Some(r) = recorder {
-        r.engine_output(seq, now_ms, result);
-    }
-}
-
 /// A running recording: the writer thread and the Zenoh taps.
 pub struct Recording {
     recorder: Recorder,
@@ -255,15 +247,17 @@ impl Recording {
     /// liveliness tokens of `zenoh` when a session is open. `None` when recording is off.
     pub async fn start(
         daemon: &crate::Config,
+        engine: &EngineConfig,
         zenoh: Option<(&zenoh::Session, &Arc<KeySpace>)>,
         live: Arc<LiveMaps>,
+        clock: &SharedClock,
     ) -> Result<Option<Self>> {
         let config = &daemon.record;
         if !config.enabled() {
             return Ok(None);
         }
         std::fs::create_dir_all(&config.dir).with_context(|| format!("creating {}", config.dir.display()))?;
-        let run = crate::brain::now_ms();
+        let run = clock.now_ms();
         let (tx, rx) = sync_channel(config.queue_messages.max(16));
         let queued_bytes = Arc::new(AtomicUsize::new(0));
         let sites = Arc::new(Mutex::new(BTreeMap::new()));
@@ -286,12 +280,7 @@ impl Recording {
             max_file_age: Duration::from_secs(config.max_file_s),
             chunk_bytes: config.chunk_bytes,
         });
-        let engine_config = RecordedEngineConfig {
-            run,
-            workers: daemon.jobs.effective_workers().max(1),
-            queue_capacity: daemon.jobs.queue_capacity,
-            watch: daemon.watch,
-        };
+        let engine_config = RecordedEngineConfig::of(run, engine);
         files.set_preamble(
             Kind::EngineConfig,
             channels::ENGINE_CONFIG,
@@ -344,7 +333,7 @@ impl Recording {
             // A blocking send: the writer drains what is queued before it sees this.
             let _ = tx.send(Entry::Stop);
             match thread {
-                Some(t) => t.join().map_err(|_| anyhow::anyhow!("the recorder thread panicked"))?,
+                Some(t) => t.join().map_err(|_| crate::err!("the recorder thread panicked"))?,
                 None => Ok(Vec::new()),
             }
         })
@@ -439,7 +428,7 @@ impl WriterThread {
                     run,
                     seq,
                     now_ms,
-                    event: RecordedEvent::from(&*event),
+                    event: *event,
                 };
                 self.files.write(
                     Kind::EngineInput,

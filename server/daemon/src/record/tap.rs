@@ -4,7 +4,8 @@
 
 use std::sync::Arc;
 
-use anyhow::{Result, anyhow};
+use crate::err;
+use crate::error::Result;
 use shift_proto::keys::{KeySpace, Ros2Mapping, Stream};
 use tokio::task::JoinHandle;
 use tokio_util::sync::CancellationToken;
@@ -27,7 +28,7 @@ pub async fn start(
     recorder: Recorder,
     stop: CancellationToken,
 ) -> Result<Vec<JoinHandle<()>>> {
-    let z = |e: zenoh::Error| anyhow!("zenoh (recorder tap): {e}");
+    let z = |e: zenoh::Error| err!("zenoh (recorder tap): {e}");
     let mut tasks = Vec::new();
     for (key_expr, stream) in ingest_keys(keys, mapping) {
         let sub = session.declare_subscriber(key_expr).await.map_err(z)?;

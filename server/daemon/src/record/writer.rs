@@ -11,7 +11,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
-use anyhow::{Context, Result};
+use crate::error::{Context, Result};
 use mcap::records::MessageHeader;
 use mcap::{Compression, WriteOptions, Writer};
 
@@ -167,7 +167,7 @@ impl RotatingWriter {
     fn put(&mut self, kind: Kind, topic: &str, log_time_ns: u64, data: &[u8]) -> Result<()> {
         let chunk = self.settings.chunk_bytes.max(1024);
         let Some(f) = self.file.as_mut() else {
-            anyhow::bail!("no open recording file");
+            crate::bail!("no open recording file");
         };
         let schema_id = match f.schemas.get(&kind) {
             Some(&id) => id,

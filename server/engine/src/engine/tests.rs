@@ -1,23 +1,24 @@
-use shift_proto::{PlanMetricsDoc, RobotSpec};
+use std::sync::Arc;
+
+use shift_proto::{PlanDocument, PlanMetricsDoc, PlanRequest, RegionReady, RobotSpec};
 
 use super::*;
+use crate::EngineError;
 use crate::robots::Pose2;
-use crate::site::MapSource;
+use crate::site::{LoadedSite, MapSource, SiteRecord};
 
 pub(super) fn site_event(name: &str) -> Event {
     let source = MapSource::Json {
         text: r#"{"resolution": 0.1, "origin": [0, 0], "width": 30, "height": 20, "cells": []}"#
             .replace("[]", &format!("[{}]", vec!["0"; 600].join(","))),
     };
-    let map = source.parse().expect("valid map");
-    Event::MapUploaded {
-        record: SiteRecord {
-            site: name.into(),
-            source,
-            updated_ms: 1,
-        },
-        map,
-    }
+    let site = LoadedSite::parse(SiteRecord {
+        site: name.into(),
+        source,
+        updated_ms: 1,
+    })
+    .expect("valid map");
+    Event::MapUploaded { site }
 }
 
 pub(super) fn request(site: &str) -> PlanRequest {
@@ -82,14 +83,18 @@ fn planned() -> JobOutcome {
 #[test]
 fn request_is_persisted_before_it_starts_and_queue_respects_workers() {
     let mut e = engine(1, 8);
-    let c1 = e.handle(Event::PlanRequested(request("s")), 10).expect("accepted");
+    let c1 = e
+        .handle(Event::PlanRequested { request: request("s") }, 10)
+        .expect("accepted");
     // Persisted as queued first, then started.
     assert_eq!(
         stored(&c1),
         vec![("p-1".into(), PlanStatus::Queued), ("p-1".into(), PlanStatus::Planning)]
     );
     assert_eq!(started(&c1), vec!["p-1".to_string()]);
-    let c2 = e.handle(Event::PlanRequested(request("s")), 11).expect("accepted");
+    let c2 = e
+        .handle(Event::PlanRequested { request: request("s") }, 11)
+        .expect("accepted");
     assert!(started(&c2).is_empty(), "one worker is busy");
     assert_eq!(e.queue_depth(), 1);
     // A region streams while the job runs: published at once, counted on the record.
@@ -147,21 +152,26 @@ fn request_is_persisted_before_it_starts_and_queue_respects_workers() {
 #[test]
 fn full_queue_refuses_and_changes_nothing() {
     let mut e = engine(1, 1);
-    e.handle(Event::PlanRequested(request("s")), 0).expect("runs");
-    e.handle(Event::PlanRequested(request("s")), 0).expect("waits");
-    let err = e.handle(Event::PlanRequested(request("s")), 0).expect_err("full");
+    e.handle(Event::PlanRequested { request: request("s") }, 0)
+        .expect("runs");
+    e.handle(Event::PlanRequested { request: request("s") }, 0)
+        .expect("waits");
+    let err = e
+        .handle(Event::PlanRequested { request: request("s") }, 0)
+        .expect_err("full");
     assert_eq!(err, EngineError::QueueFull { capacity: 1 });
     assert!(e.plan("p-3").is_none());
     // The next accepted plan still gets the next id.
     e.handle(
         Event::JobFinished {
             plan_id: "p-1".into(),
-            outcome: JobOutcome::Failed("x".into()),
+            outcome: JobOutcome::Failed { reason: "x".into() },
         },
         1,
     )
     .expect("finished");
-    e.handle(Event::PlanRequested(request("s")), 2).expect("room again");
+    e.handle(Event::PlanRequested { request: request("s") }, 2)
+        .expect("room again");
     assert!(e.plan("p-3").is_some());
 }
 
@@ -169,13 +179,19 @@ fn full_queue_refuses_and_changes_nothing() {
 fn unknown_things_and_bad_requests_are_errors() {
     let mut e = engine(1, 4);
     assert_eq!(
-        e.handle(Event::PlanRequested(request("nope")), 0).expect_err("no site"),
+        e.handle(
+            Event::PlanRequested {
+                request: request("nope")
+            },
+            0
+        )
+        .expect_err("no site"),
         EngineError::UnknownSite("nope".into())
     );
     let mut r = request("s");
     r.start = [100.0, 0.0];
     assert!(matches!(
-        e.handle(Event::PlanRequested(r), 0),
+        e.handle(Event::PlanRequested { request: r }, 0),
         Err(EngineError::InvalidRequest(_))
     ));
     assert!(matches!(
@@ -187,8 +203,10 @@ fn unknown_things_and_bad_requests_are_errors() {
 #[test]
 fn cancel_queued_running_and_finished() {
     let mut e = engine(1, 4);
-    e.handle(Event::PlanRequested(request("s")), 0).expect("runs");
-    e.handle(Event::PlanRequested(request("s")), 0).expect("waits");
+    e.handle(Event::PlanRequested { request: request("s") }, 0)
+        .expect("runs");
+    e.handle(Event::PlanRequested { request: request("s") }, 0)
+        .expect("waits");
     // Queued: removed from the queue, no job command.
     let c = e
         .handle(Event::CancelRequested { plan_id: "p-2".into() }, 1)
@@ -225,7 +243,8 @@ fn cancel_queued_running_and_finished() {
 #[test]
 fn progress_is_monotone_and_not_persisted() {
     let mut e = engine(1, 4);
-    e.handle(Event::PlanRequested(request("s")), 0).expect("runs");
+    e.handle(Event::PlanRequested { request: request("s") }, 0)
+        .expect("runs");
     let c = e
         .handle(
             Event::JobProgress {
@@ -253,10 +272,12 @@ fn progress_is_monotone_and_not_persisted() {
 #[test]
 fn shutdown_interrupts_back_to_queued_and_restore_requeues() {
     let mut e = engine(1, 4);
-    e.handle(Event::PlanRequested(request("s")), 0).expect("runs");
+    e.handle(Event::PlanRequested { request: request("s") }, 0)
+        .expect("runs");
     e.handle(Event::Shutdown, 1).expect("drain");
     assert_eq!(
-        e.handle(Event::PlanRequested(request("s")), 1).expect_err("draining"),
+        e.handle(Event::PlanRequested { request: request("s") }, 1)
+            .expect_err("draining"),
         EngineError::ShuttingDown
     );
     let c = e
@@ -281,7 +302,7 @@ fn shutdown_interrupts_back_to_queued_and_restore_requeues() {
     orphan.plan_id = "p-8".into();
     orphan.seq = 8;
     orphan.request.site = "gone".into();
-    let Event::MapUploaded { record, map } = site_event("s") else {
+    let Event::MapUploaded { site } = site_event("s") else {
         unreachable!()
     };
     let mut e2 = Engine::new(EngineConfig {
@@ -292,8 +313,9 @@ fn shutdown_interrupts_back_to_queued_and_restore_requeues() {
     let c = e2
         .handle(
             Event::Restore {
-                sites: vec![(record, map)],
+                sites: vec![site],
                 plans: vec![killed, orphan, queued],
+                active: Vec::new(),
             },
             10,
         )
@@ -304,7 +326,8 @@ fn shutdown_interrupts_back_to_queued_and_restore_requeues() {
     assert_eq!(orphan.status, PlanStatus::Failed);
     assert!(orphan.error.as_deref().unwrap_or("").contains("no longer exists"));
     // New ids continue after the highest restored one.
-    e2.handle(Event::PlanRequested(request("s")), 11).expect("accepted");
+    e2.handle(Event::PlanRequested { request: request("s") }, 11)
+        .expect("accepted");
     assert!(e2.plan("p-9").is_some());
 }
 
@@ -314,7 +337,9 @@ fn same_events_give_same_commands() {
         let mut e = engine(2, 4);
         let mut log = Vec::new();
         for t in 0..3 {
-            let c = e.handle(Event::PlanRequested(request("s")), t).expect("accepted");
+            let c = e
+                .handle(Event::PlanRequested { request: request("s") }, t)
+                .expect("accepted");
             log.push(format!("{:?}", stored(&c)));
         }
         log
@@ -325,12 +350,12 @@ fn same_events_give_same_commands() {
 #[test]
 fn bad_site_name_is_refused() {
     let mut e = engine(1, 1);
-    let Event::MapUploaded { mut record, map } = site_event("x") else {
+    let Event::MapUploaded { mut site } = site_event("x") else {
         unreachable!()
     };
-    record.site = "../etc".into();
+    site.record.site = "../etc".into();
     assert!(matches!(
-        e.handle(Event::MapUploaded { record, map }, 0),
+        e.handle(Event::MapUploaded { site }, 0),
         Err(EngineError::InvalidRequest(_))
     ));
     assert!(e.site("s").is_some());
@@ -340,7 +365,8 @@ fn bad_site_name_is_refused() {
 fn assign_tracks_progress_to_done_and_moves_between_robots() {
     use shift_proto::{WaypointDoc, WaypointKindDoc};
     let mut e = engine(1, 4);
-    e.handle(Event::PlanRequested(request("s")), 0).expect("runs");
+    e.handle(Event::PlanRequested { request: request("s") }, 0)
+        .expect("runs");
     let pts = [(0.5, 0.5), (1.5, 0.5), (2.5, 0.5)];
     let doc = Arc::new(PlanDocument {
         plan_id: "p-1".into(),

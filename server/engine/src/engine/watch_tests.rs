@@ -1,12 +1,15 @@
 //! Path watching in the engine: when checks start, one per robot at a time, and how a proposal becomes a
 //! versioned correction (checks are fed back by hand; `run_check` itself is tested in `watch.rs`).
 
+use std::sync::Arc;
+
 use proptest::prelude::*;
-use shift_proto::{CorrectionReason, PlanMetricsDoc, WaypointDoc, WaypointKindDoc};
+use shift_proto::{CorrectionDoc, CorrectionReason, PlanDocument, PlanMetricsDoc, WaypointDoc, WaypointKindDoc};
 
 use super::tests::{engine, request};
 use super::*;
-use crate::watch::ProposedCorrection;
+use crate::robots::Pose2;
+use crate::watch::{CheckOutcome, ProposedCorrection};
 
 fn wp(x: f64, y: f64, t: f64) -> WaypointDoc {
     WaypointDoc {
@@ -20,7 +23,7 @@ fn wp(x: f64, y: f64, t: f64) -> WaypointDoc {
     }
 }
 
-fn lane_doc() -> Arc<PlanDocument> {
+pub(super) fn lane_doc() -> Arc<PlanDocument> {
     Arc::new(PlanDocument {
         plan_id: "p-1".into(),
         version: 1,
@@ -37,8 +40,9 @@ fn assigned() -> (Engine, Arc<PlanDocument>) {
 }
 
 /// `e` (with site "s") with plan p-1 ready and assigned to r1.
-fn assigned_with(mut e: Engine) -> (Engine, Arc<PlanDocument>) {
-    e.handle(Event::PlanRequested(request("s")), 0).expect("queued");
+pub(super) fn assigned_with(mut e: Engine) -> (Engine, Arc<PlanDocument>) {
+    e.handle(Event::PlanRequested { request: request("s") }, 0)
+        .expect("queued");
     let doc = lane_doc();
     e.handle(
         Event::JobFinished {

@@ -1,7 +1,15 @@
 //! What a tour costs ([`tour_cost`]) and the exact option assignment for a fixed order ([`best_options`],
 //! [`dp_options`]), over a [`CostModel`]: the caller's problem as given, or the solvers' clamped instance.
 
-use super::TourProblem;
+use super::{Tour, TourProblem};
+
+impl Tour {
+    /// A tour of `order` with `options`, its cost computed by [`tour_cost`].
+    pub fn new(problem: &TourProblem, order: Vec<usize>, options: Vec<usize>) -> Self {
+        let cost = tour_cost(problem, &order, &options);
+        Self { order, options, cost }
+    }
+}
 
 /// Cost of visiting `order` with `options`, metres (formula in the module docs). An empty tour costs 0.
 /// Distances or option costs that are NaN or infinite count as `+∞`, so the result is never NaN; a node or

@@ -1,7 +1,7 @@
 //! A visiting-order problem (the depot, the nodes with their traversal options, the distances) and its
 //! solution, a [`Tour`].
 
-use super::{DistanceMatrix, tour_cost};
+use super::DistanceMatrix;
 use crate::error::{PlannerError, Result};
 
 /// One way to traverse a node: enter at point `entry`, leave at point `exit` (indices into the matrix),
@@ -114,7 +114,7 @@ impl TourProblem {
 }
 
 /// A visiting order: `order[k]` is the k-th node visited, with option `options[k]`; `cost` is
-/// [`tour_cost`] of the two, metres.
+/// [`super::tour_cost`] of the two, metres.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Tour {
     /// Node indices in visiting order (a permutation of `0..problem.nodes.len()`).
@@ -126,12 +126,6 @@ pub struct Tour {
 }
 
 impl Tour {
-    /// A tour of `order` with `options`, its cost computed by [`tour_cost`].
-    pub fn new(problem: &TourProblem, order: Vec<usize>, options: Vec<usize>) -> Self {
-        let cost = tour_cost(problem, &order, &options);
-        Self { order, options, cost }
-    }
-
     /// Checks that the tour visits every node of `problem` exactly once with an existing option.
     pub fn check(&self, problem: &TourProblem) -> Result<()> {
         let bad = |reason: String| Err(PlannerError::InvalidParam { name: "tour", reason });

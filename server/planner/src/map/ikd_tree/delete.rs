@@ -1,41 +1,10 @@
 //! Lazy deletion (box, exact point, voxel) and restoration of tombstones.
 
+use super::IkdTree;
 use super::aabb::{Aabb, Point3};
 use super::node::{F_BG_ANC, F_BG_ROOT, NIL};
 use super::rebuild::LogOp;
-use super::{IkdTree, VoxelShape};
-
-/// What a delete removes.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) enum Region {
-    /// Every valid point inside the closed box.
-    Box(Aabb),
-    /// Every valid point of a voxel (of side `vs` metres).
-    Voxel { shape: VoxelShape, vs: f32 },
-    /// Every valid point with exactly these coordinates.
-    Point(Point3),
-}
-
-impl Region {
-    /// A box holding every point the region can match.
-    #[inline]
-    fn search_box(&self) -> Aabb {
-        match self {
-            Region::Box(r) => *r,
-            Region::Voxel { shape, .. } => shape.outer,
-            Region::Point(p) => Aabb::new(*p, *p),
-        }
-    }
-
-    /// True when every point inside `b` matches (only boxes can say so).
-    #[inline]
-    fn swallows(&self, b: &Aabb) -> bool {
-        match self {
-            Region::Box(r) => r.contains_box(b),
-            _ => false,
-        }
-    }
-}
+use super::region::Region;
 
 impl IkdTree {
     /// Deletes (lazily) every valid point inside the closed box `b` and returns how many. A subtree wholly

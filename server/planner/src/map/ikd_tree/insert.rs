@@ -2,9 +2,9 @@
 //! voxel down-sampling rule decides beforehand which points of the batch enter.
 
 use super::aabb::Point3;
-use super::delete::Region;
 use super::node::{F_BG_ROOT, LEAF_CAP, NIL};
 use super::rebuild::LogOp;
+use super::region::Region;
 use super::search::VoxQuery;
 use super::{IkdTree, VoxelKey, VoxelShape, voxel_centre_dist2, voxel_key};
 

@@ -69,6 +69,7 @@ mod delete;
 mod insert;
 mod node;
 mod rebuild;
+mod region;
 mod search;
 #[cfg(test)]
 mod tests;

@@ -4,8 +4,8 @@
 use std::thread::JoinHandle;
 
 use super::aabb::{Aabb, Point3};
-use super::delete::Region;
 use super::node::{Arena, F_BG_ANC, F_BG_ROOT, LEAF_CAP, NIL};
+use super::region::Region;
 use super::{IkdParams, IkdTree};
 
 /// Subtrees with fewer points than this are not checked for balance (a handful of leaves).

@@ -1,13 +1,15 @@
-//! Live site maps as the daemon holds them: the engine's pure [`LiveMap`] behind a lock (one writer: the
-//! ingest thread; many readers), plus the rates and drop counters the API shows.
+//! Every site's live map, shared between threads: the pure [`LiveMap`] behind a lock (one writer: the daemon's
+//! ingest thread; many readers: path checks, plan jobs' overlays, the API), plus the rates and drop counters the
+//! API shows. Created at the first points routed to a site, for the extent of the site's map.
 
 use std::collections::{HashMap, VecDeque};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, RwLock};
 
-use shift_engine::{LiveMap, LiveMapParams};
 use shift_planner::map::DistanceField;
 use shift_proto::SiteSummary;
+
+use crate::live_map::{LiveMap, LiveMapParams};
 
 /// One site's live map.
 #[derive(Debug)]

@@ -1,10 +1,13 @@
-//! sensor_msgs/LaserScan → obstacle points in the map frame. Frame policy: a scan is in the laser frame, which
-//! sits at a fixed offset (x, y, yaw; `zenoh.scan_offset_*`) in the robot frame; the robot frame is placed by
-//! the robot's pose at the scan's stamp (interpolated from its odometry). `header.frame_id` is not looked at.
-//! The points get z = 0: a 2-D scan marks obstacles at any height.
+//! Sensor geometry: robot-frame points and laser returns → points in the map frame.
+//!
+//! Frame policy: a scan is in the laser frame, which sits at a fixed offset (x, y, yaw; `zenoh.scan_offset_*`)
+//! in the robot frame; the robot frame is placed by the robot's pose at the scan's stamp (interpolated from its
+//! odometry). A scan's `header.frame_id` is not looked at. Scan points get z = 0: a 2-D scan marks obstacles at
+//! any height. A cloud in the robot frame is moved by the pose at its stamp (x, y, yaw; z is kept).
 
-use shift_engine::Pose2;
 use shift_proto::ros::{LaserScan, scan_points};
+
+use crate::robots::Pose2;
 
 /// Where the laser sits in the robot frame.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -28,6 +31,15 @@ pub fn scan_to_map(scan: &LaserScan, pose: Pose2, offset: SensorOffset) -> Vec<[
     scan_points(scan)
         .into_iter()
         .map(|[x, y]| [lx + lc * x - ls * y, ly + ls * x + lc * y, 0.0])
+        .collect()
+}
+
+/// Robot-frame points `[x, y, z]` (metres) moved into the map frame by the robot's `pose` (z kept).
+pub fn robot_to_map(points: &[[f64; 3]], pose: Pose2) -> Vec<[f64; 3]> {
+    let (s, c) = pose.yaw.sin_cos();
+    points
+        .iter()
+        .map(|p| [pose.x + c * p[0] - s * p[1], pose.y + s * p[0] + c * p[1], p[2]])
         .collect()
 }
 
@@ -90,6 +102,19 @@ mod tests {
         };
         let want = [[0.0, 1.0, 0.0], [-2.0, 0.0, 0.0], [0.0, -3.0, 0.0]];
         close(&scan_to_map(&scan, origin, back), &want);
+    }
+
+    #[test]
+    fn robot_frame_points_turn_and_move_with_the_pose() {
+        let pose = Pose2 {
+            x: 1.0,
+            y: 2.0,
+            yaw: FRAC_PI_2,
+            stamp_ns: 0,
+        };
+        // 1 m ahead of a robot facing +y is 1 m up in the map; 1 m to its left is 1 m towards −x.
+        let got = robot_to_map(&[[1.0, 0.0, 0.3], [0.0, 1.0, 0.0]], pose);
+        close(&got, &[[1.0, 3.0, 0.3], [0.0, 2.0, 0.0]]);
     }
 
     #[test]

@@ -1,0 +1,211 @@
+//! What the engine takes in ([`Event`]) and what it asks the daemon to do ([`Command`]).
+
+use std::sync::Arc;
+
+use serde::{Deserialize, Serialize};
+use shift_proto::{CorrectionDoc, PlanDocument, PlanEvent, PlanRequest, RegionReady, RobotView, SiteSummary};
+
+use crate::job::PlanJob;
+use crate::plan::PlanRecord;
+use crate::robots::Pose2;
+use crate::site::{LoadedSite, SiteRecord};
+use crate::watch::{CheckJob, CheckOutcome};
+
+/// How a job ended.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum JobOutcome {
+    /// Computed.
+    Planned {
+        /// The plan document (version 1).
+        doc: Arc<PlanDocument>,
+        /// Planner remarks.
+        warnings: Vec<String>,
+    },
+    /// The planner refused or failed.
+    Failed {
+        /// Why.
+        reason: String,
+    },
+    /// Stopped because the plan was cancelled.
+    Cancelled,
+    /// Stopped because the daemon is shutting down; the plan goes back to the queue for the next start.
+    Interrupted,
+}
+
+/// Something that happened. Serialisable as recordings keep it (`{"type": "…", …}`; maps as their records,
+/// parsed again when read; non-finite numbers as strings), so a recording replays through the engine.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum Event {
+    /// State read back from the store at start-up; in-flight plans are re-queued or failed, and robots get
+    /// back the plans they were driving.
+    Restore {
+        /// Sites with their parsed maps.
+        sites: Vec<LoadedSite>,
+        /// Every plan record.
+        plans: Vec<PlanRecord>,
+        /// The current documents (corrections applied) of the plans that were being driven.
+        #[serde(default)]
+        active: Vec<Arc<PlanDocument>>,
+    },
+    /// A map was uploaded (already parsed off the async workers).
+    MapUploaded {
+        /// What to persist, with its parsed map.
+        #[serde(rename = "record")]
+        site: LoadedSite,
+    },
+    /// A client asks for a plan.
+    PlanRequested {
+        /// The request.
+        request: PlanRequest,
+    },
+    /// A client cancels a plan.
+    CancelRequested {
+        /// Plan id.
+        plan_id: String,
+    },
+    /// A worker reports progress (0–1).
+    JobProgress {
+        /// Plan id.
+        plan_id: String,
+        /// Fraction done.
+        #[serde(with = "crate::lossless_f64")]
+        progress: f64,
+    },
+    /// A worker linked one region of the plan it computes (in visiting order, before the job finishes).
+    JobRegionReady {
+        /// Plan id.
+        plan_id: String,
+        /// The region and its cover path.
+        region: RegionReady,
+    },
+    /// A worker finished.
+    JobFinished {
+        /// Plan id.
+        plan_id: String,
+        /// How.
+        outcome: JobOutcome,
+    },
+    /// A robot's liveliness token appeared (`alive`) or disappeared.
+    RobotLiveliness {
+        /// Robot id.
+        robot: String,
+        /// Token present.
+        alive: bool,
+    },
+    /// A robot's odometry, map frame.
+    RobotPose {
+        /// Robot id.
+        robot: String,
+        /// Its pose.
+        pose: Pose2,
+    },
+    /// A client assigns a ready plan to a robot (the daemon attaches the current document).
+    AssignPlan {
+        /// Plan id.
+        plan_id: String,
+        /// Robot id.
+        robot: String,
+        /// The plan's current document.
+        doc: Arc<PlanDocument>,
+    },
+    /// New obstacle points landed in a site's live map inside the box `[min, max]` (map frame, metres).
+    MapChanged {
+        /// Site.
+        site: String,
+        /// Lower corner (x, y).
+        min: [f64; 2],
+        /// Upper corner (x, y).
+        max: [f64; 2],
+    },
+    /// Robots' points reached a site's live map (the daemon says so at most about once a second per site).
+    SiteFed {
+        /// Site.
+        site: String,
+    },
+    /// A path check ended.
+    CheckFinished {
+        /// Robot checked.
+        robot: String,
+        /// Plan it drove when the check started.
+        plan_id: String,
+        /// Version checked.
+        base_version: u64,
+        /// What the check found (as computed live, so a replay needs no live map).
+        outcome: CheckOutcome,
+        /// Time the check took, microseconds (measured by the daemon).
+        compute_us: u64,
+    },
+    /// The daemon is stopping: start no more jobs, refuse new plans.
+    Shutdown,
+}
+
+/// Something the daemon must do, in the order given.
+#[derive(Debug, Clone)]
+pub enum Command {
+    /// Persist a site (before acknowledging the upload).
+    StoreSite(SiteRecord),
+    /// The read model's site summary changed.
+    SiteChanged(SiteSummary),
+    /// A site's static map is (now) this one: its clearance field tells the live map which points are known
+    /// obstacles seen again.
+    SiteStatic {
+        /// Site.
+        site: String,
+        /// Distance to the static map's non-free cells, metres.
+        clearance: Arc<shift_planner::map::DistanceField>,
+    },
+    /// Persist a plan record (a status change) and update the read model.
+    StorePlan(PlanRecord),
+    /// Update the read model only (progress, not worth a disk write).
+    UpdatePlan(PlanRecord),
+    /// Persist a computed plan document.
+    StoreResult {
+        /// Plan id.
+        plan_id: String,
+        /// The document.
+        doc: Arc<PlanDocument>,
+    },
+    /// Run this job on the worker pool.
+    StartJob(PlanJob),
+    /// Raise the cancel flag of a running job.
+    CancelJob {
+        /// Plan id.
+        plan_id: String,
+    },
+    /// Send to event subscribers.
+    Publish(PlanEvent),
+    /// Deliver a plan to a robot (its plan key, the ROS Path key; the queryable serves it from now on).
+    PublishPlan {
+        /// Robot id.
+        robot: String,
+        /// The plan.
+        doc: Arc<PlanDocument>,
+    },
+    /// The read model's robot view changed.
+    RobotChanged(RobotView),
+    /// Check this robot's path (off the engine thread, with the site's live map); answer with
+    /// [`Event::CheckFinished`].
+    StartCheck(Box<CheckJob>),
+    /// Persist a correction together with the plan record it bumps (one transaction), then show `doc` (the
+    /// corrected current version) in the read model.
+    StoreCorrection {
+        /// The plan's record at the new version.
+        record: PlanRecord,
+        /// The correction.
+        correction: Arc<CorrectionDoc>,
+        /// The current document after it.
+        doc: Arc<PlanDocument>,
+    },
+    /// Send a correction to its robot (its corrections key; the plan queryable serves the new version).
+    PublishCorrection(Arc<CorrectionDoc>),
+    /// From now on `robot`'s clouds and scans feed `site` (the site of the plan it drives), or the default site
+    /// of unassigned robots with `None`.
+    FeedSite {
+        /// Robot id.
+        robot: String,
+        /// Its plan's site.
+        site: Option<String>,
+    },
+}

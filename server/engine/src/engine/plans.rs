@@ -1,0 +1,216 @@
+//! Plans and the job queue: requests, cancels, job ends, restore after a restart, and starting queued jobs.
+
+use std::sync::Arc;
+
+use shift_proto::{PlanDocument, PlanEvent, PlanRequest, PlanStatus};
+
+use super::{Command, Engine, JobOutcome};
+use crate::error::{EngineError, Result};
+use crate::job::PlanJob;
+use crate::plan::PlanRecord;
+use crate::request::validate;
+use crate::robots::Assignment;
+use crate::site::{LoadedSite, Site};
+
+impl Engine {
+    pub(super) fn request(&mut self, request: PlanRequest, now_ms: u64, out: &mut Vec<Command>) -> Result<()> {
+        if self.draining {
+            return Err(EngineError::ShuttingDown);
+        }
+        let site = self
+            .sites
+            .get(&request.site)
+            .ok_or_else(|| EngineError::UnknownSite(request.site.clone()))?;
+        validate(&request, &site.map.grid)?;
+        if self.queue.len() >= self.config.queue_capacity {
+            return Err(EngineError::QueueFull {
+                capacity: self.config.queue_capacity,
+            });
+        }
+        let seq = self.next_seq;
+        self.next_seq += 1;
+        let rec = PlanRecord {
+            plan_id: format!("p-{seq}"),
+            seq,
+            request,
+            status: PlanStatus::Queued,
+            progress: 0.0,
+            version: 0,
+            regions_ready: 0,
+            metrics: None,
+            error: None,
+            warnings: Vec::new(),
+            robot: None,
+            driven_fraction: 0.0,
+            missed: Vec::new(),
+            watch: None,
+            progress_jumps: Vec::new(),
+            attempts: 0,
+            created_ms: now_ms,
+            updated_ms: now_ms,
+        };
+        self.queue.push_back(rec.plan_id.clone());
+        out.push(Command::StorePlan(rec.clone()));
+        out.push(Command::Publish(PlanEvent::Status(rec.to_response())));
+        self.plans.insert(rec.plan_id.clone(), rec);
+        Ok(())
+    }
+
+    pub(super) fn cancel(&mut self, plan_id: &str, now_ms: u64, out: &mut Vec<Command>) -> Result<()> {
+        let rec = self
+            .plans
+            .get_mut(plan_id)
+            .ok_or_else(|| EngineError::UnknownPlan(plan_id.to_owned()))?;
+        match rec.status {
+            PlanStatus::Queued => self.queue.retain(|id| id != plan_id),
+            PlanStatus::Planning => out.push(Command::CancelJob {
+                plan_id: plan_id.to_owned(),
+            }),
+            status => {
+                return Err(EngineError::InvalidState {
+                    plan_id: plan_id.to_owned(),
+                    status,
+                    action: "cancel",
+                });
+            }
+        }
+        rec.status = PlanStatus::Cancelled;
+        rec.updated_ms = now_ms;
+        out.push(Command::StorePlan(rec.clone()));
+        out.push(Command::Publish(PlanEvent::Status(rec.to_response())));
+        Ok(())
+    }
+
+    pub(super) fn finished(&mut self, plan_id: &str, outcome: JobOutcome, now_ms: u64, out: &mut Vec<Command>) {
+        self.running.remove(plan_id);
+        let Some(rec) = self.plans.get_mut(plan_id) else { return };
+        if rec.status != PlanStatus::Planning {
+            return; // cancelled meanwhile: the outcome is moot
+        }
+        rec.updated_ms = now_ms;
+        match outcome {
+            JobOutcome::Planned { doc, warnings } => {
+                rec.status = PlanStatus::Ready;
+                rec.progress = 1.0;
+                rec.version = doc.version;
+                rec.metrics = Some(doc.metrics);
+                rec.warnings.extend(warnings);
+                out.push(Command::StoreResult {
+                    plan_id: plan_id.to_owned(),
+                    doc,
+                });
+            }
+            JobOutcome::Failed { reason } => {
+                rec.status = PlanStatus::Failed;
+                rec.error = Some(reason);
+            }
+            JobOutcome::Cancelled => rec.status = PlanStatus::Cancelled,
+            JobOutcome::Interrupted => {
+                rec.status = PlanStatus::Queued;
+                rec.progress = 0.0;
+                rec.regions_ready = 0; // the next run streams them again
+                self.queue.push_front(plan_id.to_owned());
+            }
+        }
+        out.push(Command::StorePlan(rec.clone()));
+        out.push(Command::Publish(PlanEvent::Status(rec.to_response())));
+    }
+
+    pub(super) fn restore(
+        &mut self,
+        sites: Vec<LoadedSite>,
+        plans: Vec<PlanRecord>,
+        active: Vec<Arc<PlanDocument>>,
+        now_ms: u64,
+        out: &mut Vec<Command>,
+    ) {
+        for site in sites {
+            let site = Site::from(site);
+            out.push(Command::SiteChanged(site.summary()));
+            out.push(Command::SiteStatic {
+                site: site.record.site.clone(),
+                clearance: site.map.clearance.clone(),
+            });
+            self.sites.insert(site.record.site.clone(), site);
+        }
+        let mut plans = plans;
+        plans.sort_by_key(|r| r.seq);
+        for mut rec in plans {
+            self.next_seq = self.next_seq.max(rec.seq + 1);
+            if matches!(rec.status, PlanStatus::Queued | PlanStatus::Planning) {
+                rec.updated_ms = now_ms;
+                rec.progress = 0.0;
+                if self.sites.contains_key(&rec.request.site) {
+                    rec.status = PlanStatus::Queued;
+                    rec.warnings.push("re-queued after a restart".into());
+                    self.queue.push_back(rec.plan_id.clone());
+                } else {
+                    rec.status = PlanStatus::Failed;
+                    rec.error = Some(format!(
+                        "interrupted by a restart and site {:?} no longer exists",
+                        rec.request.site
+                    ));
+                }
+                out.push(Command::StorePlan(rec.clone()));
+            } else {
+                out.push(Command::UpdatePlan(rec.clone()));
+            }
+            self.plans.insert(rec.plan_id.clone(), rec);
+        }
+        // Robots get back the plans they were driving, at the version last committed; their first odometry
+        // finds them along it (progress re-acquisition).
+        for doc in active {
+            let Some(rec) = self.plans.get(&doc.plan_id) else {
+                continue;
+            };
+            let (PlanStatus::Active, Some(robot)) = (rec.status, rec.robot.clone()) else {
+                continue;
+            };
+            let plan_id = doc.plan_id.clone();
+            let r = self.robots.entry(&robot, now_ms);
+            r.assignment = Some(Assignment::new(plan_id, doc));
+            r.assigned_ms = now_ms;
+            self.route(&robot, out);
+        }
+    }
+
+    /// Starts queued jobs while workers are free.
+    pub(super) fn pump(&mut self, now_ms: u64, out: &mut Vec<Command>) {
+        while !self.draining && self.running.len() < self.config.workers {
+            let Some(id) = self.queue.pop_front() else { break };
+            let Some(rec) = self.plans.get_mut(&id) else { continue };
+            if rec.status != PlanStatus::Queued {
+                continue;
+            }
+            rec.updated_ms = now_ms;
+            let checked = self
+                .sites
+                .get(&rec.request.site)
+                .ok_or_else(|| EngineError::UnknownSite(rec.request.site.clone()))
+                .and_then(|site| Ok((site.map.grid.clone(), validate(&rec.request, &site.map.grid)?)));
+            match checked {
+                Ok((grid, options)) => {
+                    rec.status = PlanStatus::Planning;
+                    rec.attempts += 1;
+                    self.running.insert(id.clone());
+                    out.push(Command::StorePlan(rec.clone()));
+                    out.push(Command::Publish(PlanEvent::Status(rec.to_response())));
+                    out.push(Command::StartJob(PlanJob {
+                        plan_id: id,
+                        grid,
+                        request: rec.request.clone(),
+                        options,
+                        overlay: Vec::new(),
+                    }));
+                }
+                Err(e) => {
+                    // The site's map changed under a queued request and it no longer fits.
+                    rec.status = PlanStatus::Failed;
+                    rec.error = Some(e.to_string());
+                    out.push(Command::StorePlan(rec.clone()));
+                    out.push(Command::Publish(PlanEvent::Status(rec.to_response())));
+                }
+            }
+        }
+    }
+}
