@@ -452,3 +452,46 @@ pub fn run_cli(args: ReplayArgs) -> Result<()> {
         Ok(())
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ros2_topics_map_to_the_keys_the_fleet_reads() {
+        let keys = || KeySpace::new("shift", "default").expect("keys");
+        let native = KeyMap::new(keys(), Ros2Mapping::Native);
+        assert_eq!(
+            native.key_for("/robot1/scan", Kind::LaserScan).as_deref(),
+            Some("shift/default/robots/robot1/scan")
+        );
+        assert_eq!(
+            native.key_for("/fleet_a/robot1/points", Kind::PointCloud2).as_deref(),
+            Some("shift/default/robots/robot1/cloud")
+        );
+        assert_eq!(
+            native.key_for("/robot1/odom", Kind::PlanStatus),
+            None,
+            "not a robot stream"
+        );
+        // SHIFT's own recordings keep their Zenoh keys.
+        assert_eq!(
+            native
+                .key_for("shift/default/robots/r1/odom", Kind::Odometry)
+                .as_deref(),
+            Some("shift/default/robots/r1/odom")
+        );
+        let bridge = KeyMap::new(keys(), Ros2Mapping::BridgeRos2dds { namespace: None });
+        assert_eq!(
+            bridge.key_for("/fleet_a/robot1/odom", Kind::Odometry).as_deref(),
+            Some("fleet_a/robot1/odom"),
+            "leading slash dropped, namespace kept"
+        );
+        let rmw = KeyMap::new(keys(), Ros2Mapping::RmwZenoh { domain: 0 });
+        let key = rmw.key_for("/robot1/odom", Kind::Odometry).expect("a key");
+        assert!(
+            key.starts_with("0/robot1/odom/nav_msgs::msg::dds_::Odometry_/RIHS01_"),
+            "{key}"
+        );
+    }
+}

@@ -14,7 +14,7 @@ use std::sync::atomic::Ordering;
 use std::sync::{Arc, Condvar, Mutex};
 use std::time::{Duration, Instant};
 
-use shift_engine::sensors::{DropReason, Dropped, FramedPose, Outcome, Placed, SensorHub};
+use shift_engine::sensors::{Decoded, DropReason, Dropped, FramedPose, Outcome, Placed, SensorHub};
 use shift_engine::{Event, LiveMapParams, LiveMaps};
 use shift_proto::keys::Stream;
 
@@ -209,10 +209,7 @@ impl Ingest {
                     // The hub sees it at the time it arrived: its wait for a pose and the latency figures count
                     // from there.
                     let received_ms = now.saturating_sub(msg.received.elapsed().as_millis() as u64);
-                    self.hub
-                        .lock()
-                        .map(|mut h| h.sensor(&msg.robot, msg.stream, &msg.bytes, received_ms))
-                        .unwrap_or_default()
+                    self.sensor(&msg, received_ms)
                 }
                 Work::Tick => Vec::new(),
             };
@@ -231,6 +228,30 @@ impl Ingest {
                     }
                 }
             }
+        }
+    }
+
+    /// A cloud or scan → hub. Decoded outside the hub's lock (a large cloud takes a while; the engine loop and
+    /// the API lock the hub too), routing checked first so unrouted robots cost no decode.
+    fn sensor(&self, msg: &RawCloud, received_ms: u64) -> Vec<Outcome> {
+        let Ok(unrouted) = self.hub.lock().map(|mut h| h.unrouted(&msg.robot, msg.stream)) else {
+            return Vec::new();
+        };
+        if let Some(drop) = unrouted {
+            return vec![drop];
+        }
+        let decoded = Decoded::decode(msg.stream, &msg.bytes);
+        let Ok(mut hub) = self.hub.lock() else {
+            return Vec::new();
+        };
+        match decoded {
+            Ok(m) => hub.decoded(&msg.robot, m, received_ms),
+            Err(e) => vec![Outcome::Dropped(hub.record_drop(
+                &msg.robot,
+                msg.stream,
+                DropReason::Malformed,
+                e.to_string(),
+            ))],
         }
     }
 

@@ -207,13 +207,25 @@ pub struct SensorCounts {
     pub last_drop: Option<String>,
 }
 
+/// A decoded cloud or scan, not yet placed.
 #[derive(Debug)]
-enum Decoded {
+pub enum Decoded {
+    /// sensor_msgs/PointCloud2, x/y/z extracted.
     Cloud(CloudXyz),
+    /// sensor_msgs/LaserScan.
     Scan(LaserScan),
 }
 
 impl Decoded {
+    /// Decodes a [`Stream::Cloud`] (PointCloud2) or [`Stream::Scan`] (LaserScan) CDR payload. Pure and possibly
+    /// long for large clouds: callers sharing a hub decode before they lock it.
+    pub fn decode(stream: Stream, bytes: &[u8]) -> Result<Self, shift_proto::CodecError> {
+        match stream {
+            Stream::Scan => decode_laser_scan(bytes).map(Self::Scan),
+            _ => decode_cloud_xyz(bytes).map(Self::Cloud),
+        }
+    }
+
     fn stamp_ns(&self) -> i64 {
         match self {
             Self::Cloud(c) => c.header.stamp.to_ns(),
@@ -360,25 +372,34 @@ impl SensorHub {
     /// A cloud ([`Stream::Cloud`], sensor_msgs/PointCloud2 CDR) or scan ([`Stream::Scan`], sensor_msgs/LaserScan
     /// CDR) received at `now_ms`: placed now, dropped, or kept waiting for its pose (then nothing is returned).
     pub fn sensor(&mut self, robot: &str, stream: Stream, bytes: &[u8], now_ms: u64) -> Vec<Outcome> {
-        if self.site_of(robot).is_none() {
-            let detail = format!("{robot} is assigned no plan and the fleet has no default site (zenoh.site)");
-            return vec![Outcome::Dropped(self.drop(robot, stream, DropReason::Unrouted, detail))];
+        if let Some(unrouted) = self.unrouted(robot, stream) {
+            return vec![unrouted];
         }
-        let decoded = match stream {
-            Stream::Scan => decode_laser_scan(bytes).map(Decoded::Scan),
-            _ => decode_cloud_xyz(bytes).map(Decoded::Cloud),
-        };
-        let msg = match decoded {
-            Ok(m) => m,
-            Err(e) => {
-                return vec![Outcome::Dropped(self.drop(
-                    robot,
-                    stream,
-                    DropReason::Malformed,
-                    e.to_string(),
-                ))];
-            }
-        };
+        match Decoded::decode(stream, bytes) {
+            Ok(msg) => self.decoded(robot, msg, now_ms),
+            Err(e) => vec![Outcome::Dropped(self.drop(
+                robot,
+                stream,
+                DropReason::Malformed,
+                e.to_string(),
+            ))],
+        }
+    }
+
+    /// The drop of a message from `robot` when the robot feeds no site (checked before decoding).
+    pub fn unrouted(&mut self, robot: &str, stream: Stream) -> Option<Outcome> {
+        if self.site_of(robot).is_some() {
+            return None;
+        }
+        let detail = format!("{robot} is assigned no plan and the fleet has no default site (zenoh.site)");
+        Some(Outcome::Dropped(self.drop(robot, stream, DropReason::Unrouted, detail)))
+    }
+
+    /// A message decoded by the caller ([`Decoded::decode`]) received at `now_ms`: as [`SensorHub::sensor`].
+    pub fn decoded(&mut self, robot: &str, msg: Decoded, now_ms: u64) -> Vec<Outcome> {
+        if let Some(unrouted) = self.unrouted(robot, msg.stream()) {
+            return vec![unrouted];
+        }
         let mut out = Vec::new();
         let deadline_ms = now_ms.saturating_add(self.params.wait_ms);
         let wait_max = self.params.wait_max;
