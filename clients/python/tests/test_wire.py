@@ -211,3 +211,19 @@ def test_requests_serialise_to_the_api_shape() -> None:
     }
     with pytest.raises(ValueError, match="cells"):
         OccupancyGrid(0.05, (0.0, 0.0), 3, 2, [0] * 5)
+
+
+def test_plan_documents_round_trip() -> None:
+    doc = PlanDocument.from_json(
+        {
+            "plan_id": "p-1", "version": 3, "frame": "map",
+            "waypoints": [{"x": 1.0, "y": 2.0, "z": 0.0, "v": 0.4, "t": 12.5, "kind": "cover", "region": 2}],
+            "regions": [{"id": 2, "polygon": [[0, 0], [3, 0], [3, 3], [0, 3]]}],
+            "metrics": {"coverage_pct": 99.6, "overlap_pct": 3.1, "length_m": 201.0, "turns": 80,
+                        "collisions": 0, "duration_s": 640.0, "compute_ms": 42.0},
+        }
+    )
+    assert doc.waypoints[0] == Waypoint(1.0, 2.0, 0.0, 0.4, 12.5, "cover", 2)
+    assert doc.regions[0].polygon[2] == (3.0, 3.0)
+    assert doc.metrics is not None and doc.metrics.turns == 80 and doc.metrics.dwell_cv is None
+    assert PlanDocument.from_json(doc.to_json()) == doc

@@ -76,6 +76,9 @@ class Region:
     def from_json(cls, d: Mapping[str, Any]) -> "Region":
         return cls(id=int(d["id"]), polygon=_points(d.get("polygon")))
 
+    def to_json(self) -> Dict[str, Any]:
+        return {"id": self.id, "polygon": [[x, y] for x, y in self.polygon]}
+
 
 @dataclass(frozen=True)
 class PlanMetrics:
@@ -105,6 +108,22 @@ class PlanMetrics:
             dwell_cv_const_speed=_opt_float(d.get("dwell_cv_const_speed")),
         )
 
+    def to_json(self) -> Dict[str, Any]:
+        out: Dict[str, Any] = {
+            "coverage_pct": self.coverage_pct,
+            "overlap_pct": self.overlap_pct,
+            "length_m": self.length_m,
+            "turns": self.turns,
+            "collisions": self.collisions,
+            "duration_s": self.duration_s,
+            "compute_ms": self.compute_ms,
+        }
+        if self.dwell_cv is not None:
+            out["dwell_cv"] = self.dwell_cv
+        if self.dwell_cv_const_speed is not None:
+            out["dwell_cv_const_speed"] = self.dwell_cv_const_speed
+        return out
+
 
 @dataclass(frozen=True)
 class PlanDocument:
@@ -130,6 +149,17 @@ class PlanDocument:
             regions=[Region.from_json(r) for r in d.get("regions", [])],
             metrics=None if metrics is None else PlanMetrics.from_json(metrics),
         )
+
+    def to_json(self) -> Dict[str, Any]:
+        """The wire form (DESIGN §5.1)."""
+        return {
+            "plan_id": self.plan_id,
+            "version": self.version,
+            "frame": self.frame,
+            "waypoints": [w.to_json() for w in self.waypoints],
+            "regions": [r.to_json() for r in self.regions],
+            "metrics": None if self.metrics is None else self.metrics.to_json(),
+        }
 
     @property
     def path(self) -> List[Point2]:
