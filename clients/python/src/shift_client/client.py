@@ -34,7 +34,9 @@ def _seg(value: str) -> str:
 class PlanEvents:
     """An open ``GET /v1/plans/{id}/events`` stream: iterate it for typed events; close it (or use it as a
     context manager) to hang up. Iteration ends when the daemon ends the stream (after a ``done``, ``failed``
-    or ``cancelled`` status, or on shutdown)."""
+    or ``cancelled`` status, or on shutdown). Close it from the thread that iterates (break, then close): a
+    thread blocked waiting for the next event is not woken by a close from elsewhere until an event or a
+    keep-alive comes."""
 
     def __init__(self, response: httpx.Response) -> None:
         self._response = response

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import json
-from typing import Optional
+from typing import Optional, Tuple, Type
 
 
 class ShiftError(Exception):
@@ -31,7 +31,8 @@ class ShiftError(Exception):
         except (ValueError, KeyError, TypeError):
             return cls(status, f"http_{status}", text.strip()[:2000])
 
-    def __reduce__(self):  # keeps the fields through pickling (pytest-xdist, multiprocessing)
+    def __reduce__(self) -> Tuple[Type["ShiftError"], Tuple[int, str, str]]:
+        """Keeps the fields through pickling (multiprocessing, pytest-xdist)."""
         return (type(self), (self.status, self.code, self.message))
 
 

@@ -85,7 +85,7 @@ class Robot:
             self._odom_pub = self._session.declare_publisher(keys.odom(name), encoding=zenoh.Encoding.APPLICATION_JSON)
             self._cloud_pub = self._session.declare_publisher(keys.cloud(name), encoding=zenoh.Encoding.APPLICATION_CDR)
         except BaseException:
-            self._session.close()
+            self._session.close()  # type: ignore[no-untyped-call]
             raise
         # A robot that (re)joins asks for its current plan; in order with what the subscribers bring.
         self._inbox.put(("fetch", b""))
@@ -196,7 +196,7 @@ class Robot:
         self._closed = True
         self._inbox.put(("stop", b""))
         self._worker.join(timeout=10.0)
-        self._session.close()
+        self._session.close()  # type: ignore[no-untyped-call]
 
     def __enter__(self) -> "Robot":
         return self
@@ -240,7 +240,8 @@ class Robot:
         for reply in self._session.get(self.keys.plan(self.name), timeout=self._fetch_timeout):
             sample = reply.ok
             if sample is None:
-                self._error(f"plan query: error reply {reply.err.payload.to_bytes()!r}")
+                err = reply.err
+                self._error(f"plan query: error reply {err.payload.to_bytes() if err is not None else b''!r}")
                 continue
             doc = PlanDocument.from_json(json.loads(sample.payload.to_bytes()))
             if best is None or doc.version > best.version:
