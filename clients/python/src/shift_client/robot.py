@@ -183,7 +183,8 @@ class Robot:
 
     def fetch_plan(self) -> Optional[PlanDocument]:
         """Asks the daemon for this robot's plan now (a Zenoh ``get`` on its plan key) and adopts it when it is
-        newer. Returns the current plan. Safe from any thread except an ``on_plan`` callback."""
+        newer. Returns the current plan. Call it from any thread (``on_plan`` included) but not from inside a Zenoh
+        callback, where a ``get`` would wait on the runtime it runs on."""
         doc = self._query_plan()
         if doc is not None:
             self._adopt(doc)
