@@ -96,6 +96,30 @@ pub struct PlanRequest {
     /// Planner choices.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub options: Option<PlanOptions>,
+    /// What the plan minimises among those that meet the coverage bar (default `time`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub objective: Option<PlanObjective>,
+    /// When the start's piece of traversable space is small (under half the largest piece, typical of a
+    /// start a few centimetres off on a real map), move the start into the largest piece if one of its cells
+    /// is within this many metres. Absent: the start stays, and the plan's warnings say where it leads.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub snap_start_m: Option<f64>,
+}
+
+/// What a plan minimises (DESIGN §6), subject to the coverage bar.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+#[serde(rename_all = "lowercase")]
+pub enum PlanObjective {
+    /// The time the plan takes to drive under the robot's speed and acceleration limits (`duration_s`).
+    #[default]
+    Time,
+    /// Path length.
+    Length,
+    /// Overlap.
+    Overlap,
+    /// Heading changes of 30° or more.
+    Turns,
 }
 
 /// Lifecycle of a plan.
@@ -403,6 +427,9 @@ pub struct SiteSummary {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 #[serde(tag = "type", rename_all = "kebab-case")]
+// The status variant is the large one and also the common one (every change, the first event on connect);
+// boxing it would allocate per event and change a public wire type that clients match on.
+#[allow(clippy::large_enum_variant)]
 pub enum PlanEvent {
     /// The plan's status changed (also sent first, on connect).
     Status(PlanStatusResponse),

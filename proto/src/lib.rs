@@ -14,9 +14,9 @@ pub mod ros;
 pub mod scene;
 
 pub use api::{
-    AssignRequest, ErrorBody, ErrorDetail, LastCorrection, PlanAccepted, PlanEvent, PlanOptions, PlanRequest,
-    PlanStatus, PlanStatusResponse, PoseView, ProgressJump, RegionReady, RobotSensorsView, RobotSpec, RobotView,
-    SiteSummary, SpeedProfileResponse, SpeedSample, WatchHealth,
+    AssignRequest, ErrorBody, ErrorDetail, LastCorrection, PlanAccepted, PlanEvent, PlanObjective, PlanOptions,
+    PlanRequest, PlanStatus, PlanStatusResponse, PoseView, ProgressJump, RegionReady, RobotSensorsView, RobotSpec,
+    RobotView, SiteSummary, SpeedProfileResponse, SpeedSample, WatchHealth,
 };
 pub use attribute::{AttributeBlobDoc, AttributeDoc};
 pub use correction::{CorrectionDoc, CorrectionError, CorrectionReason};

@@ -87,6 +87,16 @@ pub struct PlanMetricsDoc {
     pub dwell_cv_const_speed: Option<f64>,
     /// Time to compute the plan, milliseconds.
     pub compute_ms: f64,
+    /// Where the robot's centre can go from the start (DESIGN §6 reachable), m².
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reachable_area_m2: Option<f64>,
+    /// What a complete plan covers from the start (DESIGN §6 coverable), m².
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub coverable_area_m2: Option<f64>,
+    /// Free cells of the whole map (within the request's region), m²: set against `coverable_area_m2`, how
+    /// much of the site the start leads to.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub free_area_m2: Option<f64>,
 }
 
 #[cfg(test)]

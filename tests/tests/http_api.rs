@@ -241,6 +241,39 @@ async fn demo_site_plans_with_embedded_defaults() -> Result<()> {
     let st = server.wait_plan(id, LONG, |s| s != "queued" && s != "planning").await?;
     assert_eq!(st["status"], "ready", "{st}");
     assert!(st["metrics"]["coverage_pct"].as_f64().unwrap_or(0.0) >= 99.0);
+    // The areas say how much of the site the start leads to: on the demo site, all of it that a robot fits.
+    let area = |k: &str| st["metrics"][k].as_f64().unwrap_or(f64::NAN);
+    let (reach, cover, free) = (
+        area("reachable_area_m2"),
+        area("coverable_area_m2"),
+        area("free_area_m2"),
+    );
+    assert!(reach > 0.0 && reach < cover && cover <= free, "{st}");
+    // Another objective is a request away; an unknown one is refused naming the field.
+    let mut turns = demo_request();
+    turns["objective"] = json!("turns");
+    turns["snap_start_m"] = json!(1.0);
+    let (code, acc) = server.post("/v1/plans", &turns).await?;
+    assert_eq!(code, 202, "{acc}");
+    let id = acc["plan_id"].as_str().context("id")?;
+    let st = server.wait_plan(id, LONG, |s| s != "queued" && s != "planning").await?;
+    assert_eq!(st["status"], "ready", "{st}");
+    let mut bad = demo_request();
+    bad["objective"] = json!("fastest");
+    let (code, body) = server.post("/v1/plans", &bad).await?;
+    assert_eq!(code, 400, "{body}");
+    assert!(
+        body["error"]["message"].as_str().unwrap_or("").contains("objective"),
+        "{body}"
+    );
+    let mut bad = demo_request();
+    bad["snap_start_m"] = json!(-1.0);
+    let (code, body) = server.post("/v1/plans", &bad).await?;
+    assert_eq!(code, 400, "{body}");
+    assert!(
+        body["error"]["message"].as_str().unwrap_or("").contains("snap_start_m"),
+        "{body}"
+    );
     server.stop().await
 }
 

@@ -29,6 +29,8 @@ pub struct EvalRow {
     pub order: String,
     /// Pattern.
     pub pattern: String,
+    /// Time to drive the profiled plan, seconds.
+    pub duration_s: f64,
     /// Coverage, percent.
     pub coverage_pct: f64,
     /// Overlap, percent.
@@ -41,8 +43,6 @@ pub struct EvalRow {
     pub compute_ms: f64,
     /// Collisions.
     pub collisions: usize,
-    /// Time to drive the profiled plan, seconds.
-    pub duration_s: f64,
     /// Dwell uniformity with the profiled speeds (scenes with an attribute map).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub dwell_cv: Option<f64>,
@@ -89,13 +89,13 @@ pub fn run_eval(root: &Path, render: Option<&Path>, mut on_row: impl FnMut(&Eval
                 decomposition: decomposition.into(),
                 order: order.into(),
                 pattern: pattern.into(),
+                duration_s: d.duration_s,
                 coverage_pct: m.coverage_pct,
                 overlap_pct: m.overlap_pct,
                 length_m: m.length_m,
                 turns: m.turns,
                 compute_ms: ms,
                 collisions: m.collisions,
-                duration_s: d.duration_s,
                 dwell_cv: attribute.is_some().then_some(d.dwell_cv),
                 dwell_cv_const_speed: attribute.is_some().then_some(d.dwell_cv_const_speed),
             };
@@ -153,25 +153,25 @@ pub fn run_eval(root: &Path, render: Option<&Path>, mut on_row: impl FnMut(&Eval
 }
 
 /// The table header.
-pub const TABLE_HEADER: &str = "scene                 decomposition order        pattern    coverage%  overlap%   length_m  turns  compute_ms  collisions  duration_s  dwell_cv  dwell_cv_const";
+pub const TABLE_HEADER: &str = "scene                 decomposition order        pattern     duration_s  coverage%  overlap%   length_m  turns  compute_ms  collisions  dwell_cv  dwell_cv_const";
 
-/// One table line (coverage, length, turns and collisions of the smoothed path; "-" for the dwell figures of
-/// scenes without an attribute map).
+/// One table line, duration first (the default objective), then coverage, length, turns and collisions of
+/// the smoothed path; "-" for the dwell figures of scenes without an attribute map.
 pub fn table_line(r: &EvalRow) -> String {
     let opt = |v: Option<f64>| v.map_or_else(|| "-".to_owned(), |v| format!("{v:.3}"));
     format!(
-        "{:<21} {:<13} {:<12} {:<10} {:>9.2} {:>9.2} {:>10.1} {:>6} {:>11.1} {:>11} {:>11.0} {:>9} {:>15}",
+        "{:<21} {:<13} {:<12} {:<10} {:>11.0} {:>9.2} {:>9.2} {:>10.1} {:>6} {:>11.1} {:>11} {:>9} {:>15}",
         r.scene,
         r.decomposition,
         r.order,
         r.pattern,
+        r.duration_s,
         r.coverage_pct,
         r.overlap_pct,
         r.length_m,
         r.turns,
         r.compute_ms,
         r.collisions,
-        r.duration_s,
         opt(r.dwell_cv),
         opt(r.dwell_cv_const_speed)
     )

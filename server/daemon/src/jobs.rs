@@ -101,7 +101,13 @@ impl JobRunner {
             let outcome = match result {
                 Ok(Ok(res)) => {
                     metrics::histogram!("shift_plan_compute_seconds").record(compute_ms / 1e3);
-                    let doc = to_document(&plan_id, &res.output, &res.profile, res.with_attribute, compute_ms);
+                    let doc = to_document(
+                        &plan_id,
+                        (&res.space, &res.output),
+                        &res.profile,
+                        res.with_attribute,
+                        compute_ms,
+                    );
                     JobOutcome::Planned {
                         doc: Arc::new(doc),
                         warnings: res.output.warnings,

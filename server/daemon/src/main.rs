@@ -11,7 +11,7 @@ use shift_planner::decompose::DecompositionMethod;
 use shift_planner::geom::Point2;
 use shift_planner::order::OrderMethod;
 use shift_planner::pattern::PatternMethod;
-use shift_planner::pipeline::{NoMonitor, PlanParams, plan_shaped};
+use shift_planner::pipeline::{NoMonitor, Objective, PlanParams, plan_shaped};
 use shift_planner::space::{CoverageSpace, RobotShape};
 use shift_planner::speed::{SpeedLimits, SpeedParams};
 use shiftd::eval::{TABLE_HEADER, run_eval, table_line};
@@ -77,7 +77,7 @@ struct PlanArgs {
     /// Tool width, metres.
     #[arg(long)]
     tool_width: Option<f64>,
-    /// Decomposition: auto (of bcd, walls and one undivided spiral, the plan with the least overlap that covers ≥ 99 %), bcd, walls, voronoi, grid, none.
+    /// Decomposition: auto (of bcd, walls and one undivided spiral, the plan that covers ≥ 99 % with the best --objective), bcd, walls, voronoi, grid, none.
     #[arg(long, default_value = "auto")]
     decomposition: DecompositionMethod,
     /// Visiting order solver: two-opt, rrt, anneal.
@@ -89,6 +89,13 @@ struct PlanArgs {
     /// Seed for every random choice.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// What the plan minimises among those that cover ≥ 99 %: time (the driving time under the speed
+    /// limits), length, overlap, turns.
+    #[arg(long, default_value = "time")]
+    objective: Objective,
+    /// Move a start whose traversable piece is small into the largest piece when it is this close, metres.
+    #[arg(long)]
+    snap_start_m: Option<f64>,
     /// Attribute map (grey PGM/PNG of the map's size, or JSON blobs {"blobs": [{x, y, sigma, amplitude}]});
     /// default: the scene's attribute, else A = 1 everywhere.
     #[arg(long)]
@@ -248,12 +255,14 @@ fn cmd_plan(args: PlanArgs) -> Result<()> {
         None => None,
     };
     let t = Instant::now();
-    let space = CoverageSpace::new(grid, robot, start)?;
+    let space = CoverageSpace::with_start_snap(grid, robot, start, args.snap_start_m)?;
     let params = PlanParams {
         decomposition: args.decomposition,
         order: args.order,
         pattern: args.pattern,
         seed: args.seed,
+        objective: args.objective,
+        limits,
         ..PlanParams::default()
     };
     let mut speed = SpeedParams::new(limits, space.robot.tool_width_m);
@@ -266,7 +275,7 @@ fn cmd_plan(args: PlanArgs) -> Result<()> {
     for w in &warnings {
         eprintln!("warning: {w}");
     }
-    let doc = to_document("p-cli", &out, &profile, attribute.is_some(), ms);
+    let doc = to_document("p-cli", (&space, &out), &profile, attribute.is_some(), ms);
     let text = serde_json::to_string_pretty(&doc)?;
     if args.out.as_os_str() == "-" {
         println!("{text}");

@@ -217,6 +217,8 @@ mod tests {
                 attribute: None,
                 region: None,
                 options: None,
+                objective: None,
+                snap_start_m: None,
             },
             status,
             progress: 0.0,

@@ -5,11 +5,11 @@ use std::sync::Arc;
 
 use shift_planner::geom::Point2;
 use shift_planner::map::grid::{CellState, GridGeometry, OccupancyGrid};
-use shift_planner::pipeline::{PlanMonitor, PlanOutput, PlanParams, plan_shaped};
+use shift_planner::pipeline::{Objective, PlanMonitor, PlanOutput, PlanParams, plan_shaped};
 use shift_planner::space::{CoverageSpace, RobotShape};
 use shift_planner::speed::attribute::{AttributeBlob, AttributeMap};
 use shift_planner::speed::{SpeedLimits, SpeedParams, SpeedProfile};
-use shift_proto::{AttributeDoc, PlanRequest};
+use shift_proto::{AttributeDoc, PlanObjective, PlanRequest};
 
 use crate::request::{ParsedOptions, point_in_polygon};
 
@@ -62,6 +62,16 @@ pub fn attribute_map(doc: &AttributeDoc, geometry: GridGeometry) -> shift_planne
     AttributeMap::from_blobs(geometry, &blobs)
 }
 
+/// The planner's objective for the wire's.
+fn objective(o: PlanObjective) -> Objective {
+    match o {
+        PlanObjective::Time => Objective::Time,
+        PlanObjective::Length => Objective::Length,
+        PlanObjective::Overlap => Objective::Overlap,
+        PlanObjective::Turns => Objective::Turns,
+    }
+}
+
 /// A computed job: the planner's output and its smoothed, timed speed profile.
 #[derive(Debug)]
 pub struct JobResult {
@@ -103,19 +113,21 @@ pub fn run_job(job: &PlanJob, monitor: &mut dyn PlanMonitor) -> shift_planner::R
         let keep_clear_m = 2.0 * r.radius + grid.geometry.resolution;
         apply_overlay(&mut grid, &job.overlay, start, keep_clear_m);
     }
-    let space = CoverageSpace::new(grid, robot, start)?;
+    let space = CoverageSpace::with_start_snap(grid, robot, start, job.request.snap_start_m)?;
+    let limits = SpeedLimits::new(r.v_min, r.v_max, r.a_max);
     let params = PlanParams {
         decomposition: job.options.decomposition,
         order: job.options.order,
         pattern: job.options.pattern,
         seed: job.options.seed,
+        objective: objective(job.request.objective.unwrap_or_default()),
+        limits,
         ..PlanParams::default()
     };
     let attribute = match &job.request.attribute {
         Some(a) => Some(attribute_map(a, space.grid.geometry)?),
         None => None,
     };
-    let limits = SpeedLimits::new(r.v_min, r.v_max, r.a_max);
     let speed = SpeedParams::new(limits, r.tool_width);
     let (output, profile) = plan_shaped(&space, &params, attribute.as_ref(), &speed, monitor)?;
     if monitor.cancelled() {
@@ -156,6 +168,8 @@ mod tests {
             attribute: None,
             region: Some(poly.clone()),
             options: None,
+            objective: None,
+            snap_start_m: None,
         };
         let options = validate(&request, &grid).expect("valid");
         let job = PlanJob {
@@ -194,6 +208,8 @@ mod tests {
             attribute: None,
             region: None,
             options: None,
+            objective: None,
+            snap_start_m: None,
         }
     }
 

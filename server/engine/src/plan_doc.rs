@@ -1,15 +1,16 @@
 //! Planner output → the plan document of DESIGN §5.1.
 
 use shift_planner::pipeline::{PlanOutput, WaypointKind};
+use shift_planner::space::CoverageSpace;
 use shift_planner::speed::SpeedProfile;
 use shift_proto::{PlanDocument, PlanMetricsDoc, RegionDoc, WaypointDoc, WaypointKindDoc};
 
 /// Builds the wire document from the plan (regions) and its speed profile (the smoothed, timed waypoints:
 /// v in m/s, t in seconds from the start, and the metrics of that path). `with_dwell` adds the dwell
-/// uniformity figures (when an attribute map was given).
+/// uniformity figures (when an attribute map was given). `space` (what was planned in) gives the areas.
 pub fn to_document(
     plan_id: &str,
-    out: &PlanOutput,
+    (space, out): (&CoverageSpace, &PlanOutput),
     profile: &SpeedProfile,
     with_dwell: bool,
     compute_ms: f64,
@@ -54,6 +55,9 @@ pub fn to_document(
             dwell_cv: with_dwell.then_some(profile.dwell.dwell_cv),
             dwell_cv_const_speed: with_dwell.then_some(profile.dwell.dwell_cv_const_speed),
             compute_ms,
+            reachable_area_m2: Some(space.reachable_area_m2()),
+            coverable_area_m2: Some(space.coverable_area_m2()),
+            free_area_m2: Some(space.free_area_m2()),
         },
     }
 }

@@ -374,6 +374,8 @@ mod tests {
             attribute: None,
             region: None,
             options: None,
+            objective: None,
+            snap_start_m: None,
         };
         vec![
             Event::MapUploaded { site },

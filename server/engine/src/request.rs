@@ -97,6 +97,11 @@ pub fn validate(req: &PlanRequest, grid: &OccupancyGrid) -> Result<ParsedOptions
             start.x, start.y, g.origin.x, x1, g.origin.y, y1
         )));
     }
+    if let Some(d) = req.snap_start_m
+        && finite("snap_start_m", d)? < 0.0
+    {
+        return Err(invalid(format!("snap_start_m must be zero or more metres, got {d}")));
+    }
     if let Some(a) = &req.attribute {
         for (i, b) in a.blobs.iter().enumerate() {
             finite(&format!("attribute.blobs[{i}].x"), b.x)?;
@@ -145,7 +150,7 @@ pub fn point_in_polygon(p: Point2, poly: &[[f64; 2]]) -> bool {
 #[cfg(test)]
 mod tests {
     use shift_planner::map::grid::{CellState, GridGeometry};
-    use shift_proto::{PlanOptions, RobotSpec};
+    use shift_proto::{PlanObjective, PlanOptions, RobotSpec};
 
     use super::*;
 
@@ -168,6 +173,8 @@ mod tests {
             attribute: None,
             region: None,
             options: None,
+            objective: None,
+            snap_start_m: None,
         }
     }
 
@@ -203,6 +210,27 @@ mod tests {
         let mut r = request();
         r.region = Some(vec![[2.0, 2.0], [3.0, 2.0], [3.0, 3.0]]);
         assert!(validate(&r, &g).is_err(), "start outside the region");
+        for d in [f64::NAN, -1.0, f64::INFINITY] {
+            let mut r = request();
+            r.snap_start_m = Some(d);
+            let e = validate(&r, &g).expect_err("bad snap");
+            assert!(e.to_string().contains("snap_start_m"), "{e}");
+        }
+    }
+
+    #[test]
+    fn the_objective_is_a_known_name() {
+        let body = |o: &str| {
+            format!(
+                r#"{{"site": "s", "start": [1, 1], "robot": {{"radius": 0.15, "tool_width": 0.3}}, "objective": "{o}"}}"#
+            )
+        };
+        for (name, want) in [("time", PlanObjective::Time), ("turns", PlanObjective::Turns)] {
+            let r: PlanRequest = serde_json::from_str(&body(name)).expect("parses");
+            assert_eq!(r.objective, Some(want));
+        }
+        let e = serde_json::from_str::<PlanRequest>(&body("fast")).expect_err("unknown objective");
+        assert!(e.to_string().contains("unknown variant"), "{e}");
     }
 
     #[test]

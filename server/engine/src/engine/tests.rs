@@ -35,6 +35,8 @@ pub(super) fn request(site: &str) -> PlanRequest {
         attribute: None,
         region: None,
         options: None,
+        objective: None,
+        snap_start_m: None,
     }
 }
 

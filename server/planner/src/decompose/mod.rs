@@ -78,9 +78,10 @@ pub trait Decomposer {
 pub enum DecompositionMethod {
     /// The default: plan with boustrophedon cells and with wall division (in the requested pattern; on sites
     /// above `pipeline::LARGE_SITE_CELLS` reachable cells wall division only) and with one spiral over the
-    /// undivided space, and keep the plan with the least overlap (DESIGN §6: swept area per covered area) that meets the coverage
-    /// bar. No single strategy wins on every kind of map: rooms favour the contour-following spiral, racks and
-    /// aisles the cells, open ground with round obstacles the wall division.
+    /// undivided space, and keep the plan that meets the coverage bar with the best value of the request's
+    /// objective (default: the least driving time, DESIGN §6 `duration_s`). No single strategy wins on every
+    /// kind of map: rooms favour the contour-following spiral, racks and aisles the cells, open ground with
+    /// round obstacles the wall division.
     #[default]
     Auto,
     /// Boustrophedon cellular decomposition (Choset): cells split at the sweep line's critical points.

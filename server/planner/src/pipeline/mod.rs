@@ -2,6 +2,8 @@
 //! decompose → pattern per region → targeted passes → region routes → visiting order → links → metrics.
 
 mod assemble;
+pub mod objective;
+pub use objective::Objective;
 mod portfolio;
 pub mod prepare;
 pub mod route;
@@ -19,11 +21,13 @@ use crate::pattern::boundary::PassParams;
 use crate::pattern::lanes::{LaneParams, Placement};
 use crate::pattern::{PatternMethod, Task};
 use crate::space::CoverageSpace;
+use crate::speed::limits::SpeedLimits;
 
-/// Reachable cells above which `auto` prepares only wall division with fitted lanes and the undivided spiral
-/// (the two best on large generated sites: 200 m × 200 m, 400 obstacles: spiral 9.95 %, walls/fit 10.01 %,
-/// walls/lattice 10.42 %, bcd 13.95–20.7 % overlap) instead of bcd and walls × lattice, fit and framed lanes
-/// plus the spiral: every member is a full preparation, and on a large site each takes seconds.
+/// Reachable cells above which `auto` prepares only the undivided spiral and undivided fitted lanes, with
+/// wall division and fitted lanes in reserve (the best on large generated sites: 200 m × 200 m, 400
+/// obstacles: spiral 9.95 %, walls/fit 10.01 %, walls/lattice 10.42 %, bcd 13.95–20.7 % overlap), instead of
+/// bcd and walls × lattice, fit and framed lanes plus the spiral and undivided lanes: every member is a full
+/// preparation, and on a large site each takes seconds.
 pub const LARGE_SITE_CELLS: usize = 1_000_000;
 
 /// Overlap a plan may have and still count as economical (the acceptance bar of the planner, percent).
@@ -55,6 +59,10 @@ pub struct PlanParams {
     /// Threads that prepare a portfolio's strategies side by side (0: one per core). The plan does not
     /// depend on it.
     pub threads: usize,
+    /// What the portfolio minimises among the strategies that meet the coverage bar.
+    pub objective: Objective,
+    /// The robot's speed limits, for the time objective's estimate (the speed profile takes its own).
+    pub limits: SpeedLimits,
 }
 
 impl Default for PlanParams {
@@ -71,6 +79,8 @@ impl Default for PlanParams {
             targeted_passes: true,
             passes: PassParams::default(),
             threads: 0,
+            objective: Objective::Time,
+            limits: SpeedLimits::default(),
         }
     }
 }

@@ -2,8 +2,8 @@
 //! the lane placements when none is fixed) is prepared up to its tour, the best [`Estimate`] wins, and only
 //! the winner is linked — so links are searched once, and the monitor's region-ready calls are final.
 //!
-//! Ranking: plans that meet the coverage bar beat those that do not; then the least estimated overlap
-//! (DESIGN §6: for equal coverage, the shortest path); earlier members win ties. When speeds follow an
+//! Ranking ([`super::objective`]): plans that meet the coverage bar beat those that do not; then the
+//! request's objective (default: the least estimated driving time); earlier members win ties. When speeds follow an
 //! attribute map, the best few are linked and the profiled dwell decides among them ([`super::shaped`]).
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -18,7 +18,8 @@ use crate::pattern::lanes::{LaneParams, Placement};
 use crate::space::CoverageSpace;
 
 use super::assemble::assemble;
-use super::prepare::{Basis, Estimate, Prepared, nearest_reachable, prepare};
+use super::objective::{compare_keys, rank_keys};
+use super::prepare::{Basis, Prepared, nearest_reachable, prepare};
 use super::{LARGE_SITE_CELLS, OVERLAP_BAR_PCT, PlanMonitor, PlanOutput, PlanParams};
 
 /// Share of the progress bar the preparations take (the rest is linking the winner).
@@ -61,7 +62,7 @@ impl Ranked {
             return Ok(Vec::new());
         }
         let mut more = prepare_members(space, params, &reserve, monitor)?;
-        rank(&mut more, coverage_bar(params));
+        rank(&mut more, coverage_bar(params), params);
         Ok(more)
     }
 }
@@ -76,7 +77,7 @@ pub fn prepare_ranked(space: &CoverageSpace, params: &PlanParams, monitor: &mut 
         prepared: prepare_members(space, params, &first, monitor)?,
         reserve,
     };
-    rank(&mut ranked.prepared, target);
+    rank(&mut ranked.prepared, target, params);
     let short = ranked
         .prepared
         .first()
@@ -84,7 +85,7 @@ pub fn prepare_ranked(space: &CoverageSpace, params: &PlanParams, monitor: &mut 
     if short {
         let more = ranked.prepare_reserve(space, params, monitor)?;
         ranked.prepared.extend(more);
-        rank(&mut ranked.prepared, target);
+        rank(&mut ranked.prepared, target, params);
     }
     Ok(ranked)
 }
@@ -94,17 +95,15 @@ pub fn economical(coverage_pct: f64, overlap_pct: f64, target_pct: f64) -> bool 
     coverage_pct + 1e-9 >= target_pct && overlap_pct <= OVERLAP_BAR_PCT
 }
 
-/// Sorts `prepared` best first; a stable sort, so equal estimates keep member order.
-fn rank(prepared: &mut [Prepared], target: f64) {
-    prepared.sort_by(|a, b| {
-        if better(&a.estimate, &b.estimate, target) {
-            std::cmp::Ordering::Less
-        } else if better(&b.estimate, &a.estimate, target) {
-            std::cmp::Ordering::Greater
-        } else {
-            std::cmp::Ordering::Equal
-        }
-    });
+/// Sorts `prepared` best first by `params`' objective ([`rank_keys`]); a stable sort, so equal estimates keep
+/// member order.
+fn rank(prepared: &mut Vec<Prepared>, target: f64, params: &PlanParams) {
+    let estimates: Vec<_> = prepared.iter().map(|p| p.estimate).collect();
+    let keys = rank_keys(&estimates, target, params.objective);
+    let mut order: Vec<usize> = (0..prepared.len()).collect();
+    order.sort_by(|&a, &b| compare_keys(&keys[a], &keys[b]));
+    let mut slots: Vec<Option<Prepared>> = std::mem::take(prepared).into_iter().map(Some).collect();
+    prepared.extend(order.into_iter().filter_map(|k| slots[k].take()));
 }
 
 /// `members` prepared side by side, in member order.
@@ -218,25 +217,36 @@ fn run_parallel<T: Send>(
     slots
 }
 
-/// The strategies `params` leaves open, in tie-breaking order: those prepared first, and those held in
-/// reserve. Above [`LARGE_SITE_CELLS`] reachable cells only the undivided spiral comes first (on generated
-/// 100 m and 200 m sites its connected rings leave 2.9 % overlap against 10 % for the best lanes, and it
-/// prepares in less time); walls with fitted lanes stay in reserve.
+/// The strategies `params` leaves open, in tie-breaking order: those prepared first (bcd and walls, a
+/// spiral and a sweep in the requested pattern over the undivided space), and those held in reserve. Above
+/// [`LARGE_SITE_CELLS`] reachable cells only the undivided spiral and fitted lanes over the undivided space
+/// come first (every member is a full preparation, and on a large site each takes seconds); walls with
+/// fitted lanes stay in reserve.
 pub fn members(space: &CoverageSpace, params: &PlanParams) -> (Vec<PlanParams>, Vec<PlanParams>) {
     let large = space.reachable_count() > LARGE_SITE_CELLS;
     let spiral = (DecompositionMethod::Single, PatternMethod::Spiral);
     let (first, reserve): (Vec<(DecompositionMethod, PatternMethod)>, Vec<_>) = match (params.decomposition, large) {
-        (DecompositionMethod::Auto, true) => (vec![spiral], vec![(DecompositionMethod::Walls, params.pattern)]),
+        (DecompositionMethod::Auto, true) => (
+            vec![spiral, (DecompositionMethod::Single, params.pattern)],
+            vec![(DecompositionMethod::Walls, params.pattern)],
+        ),
         (DecompositionMethod::Auto, false) => (
             vec![
                 (DecompositionMethod::Bcd, params.pattern),
                 (DecompositionMethod::Walls, params.pattern),
                 spiral,
+                // One sweep over the undivided space in the requested pattern: lanes there are the plan a
+                // person would draw on open ground and in halls with a few obstacles, and under the time
+                // objective often the fastest (long lanes, few turns); among rooms its long steps lose to
+                // the divided plans. (With the spiral pattern it is the spiral above.)
+                (DecompositionMethod::Single, params.pattern),
             ],
             Vec::new(),
         ),
         (d, _) => (vec![(d, params.pattern)], Vec::new()),
     };
+    let mut first = first;
+    first.dedup();
     let placements: &[Placement] = if large {
         &[Placement::Fit]
     } else {
@@ -269,17 +279,6 @@ pub fn members(space: &CoverageSpace, params: &PlanParams) -> (Vec<PlanParams>, 
     (expand(first), expand(reserve))
 }
 
-/// True when `a` ranks strictly above `b` (see the module docs).
-fn better(a: &Estimate, b: &Estimate, target_pct: f64) -> bool {
-    match (a.good(target_pct), b.good(target_pct)) {
-        (true, false) => true,
-        (false, true) => false,
-        (true, true) => a.overlap_pct + 1e-9 < b.overlap_pct,
-        // Neither meets the bar: more coverage first.
-        (false, false) => a.coverage_pct > b.coverage_pct + 1e-9,
-    }
-}
-
 /// A worker's monitor: cancelled when the calling thread raised the flag; progress is reported per job.
 struct Relay<'a>(&'a AtomicBool);
 
@@ -310,6 +309,9 @@ mod tests {
             }
         }
         want.push((DecompositionMethod::Single, PatternMethod::Spiral, None));
+        for p in [Placement::Lattice, Placement::Fit, Placement::Framed] {
+            want.push((DecompositionMethod::Single, PatternMethod::Lanes, Some(p)));
+        }
         assert_eq!(names, want);
         // Everything fixed: exactly the request.
         let fixed = PlanParams {
@@ -324,7 +326,7 @@ mod tests {
     }
 
     #[test]
-    fn large_sites_prepare_the_spiral_with_walls_and_fitted_lanes_in_reserve() {
+    fn large_sites_prepare_the_spiral_and_undivided_lanes_with_walls_in_reserve() {
         use crate::geom::Point2;
         use crate::map::{CellState, GridGeometry, OccupancyGrid};
         use crate::space::RobotShape;
@@ -344,7 +346,10 @@ mod tests {
         };
         assert_eq!(
             names(&first),
-            vec![(DecompositionMethod::Single, PatternMethod::Spiral, None)]
+            vec![
+                (DecompositionMethod::Single, PatternMethod::Spiral, None),
+                (DecompositionMethod::Single, PatternMethod::Lanes, Some(Placement::Fit))
+            ]
         );
         assert_eq!(
             names(&reserve),
@@ -368,25 +373,5 @@ mod tests {
             assert_eq!(other.points(), one.points(), "{threads} threads");
             assert_eq!(other.decomposition, one.decomposition);
         }
-    }
-
-    #[test]
-    fn ranking_puts_the_coverage_bar_before_overlap() {
-        let e = |coverage_pct: f64, overlap_pct: f64| Estimate {
-            coverage_pct,
-            length_m: 1.0,
-            overlap_pct,
-        };
-        assert!(better(&e(99.5, 30.0), &e(98.0, 5.0), 99.0));
-        assert!(!better(&e(98.0, 5.0), &e(99.5, 30.0), 99.0));
-        assert!(better(&e(99.2, 10.0), &e(99.9, 12.0), 99.0));
-        assert!(
-            !better(&e(99.2, 10.0), &e(99.2, 10.0), 99.0),
-            "ties keep the earlier member"
-        );
-        assert!(
-            better(&e(97.0, 50.0), &e(96.0, 5.0), 99.0),
-            "below the bar: more coverage first"
-        );
     }
 }

@@ -1,14 +1,15 @@
 //! Plans whose speeds follow an attribute map (RFICP): the strategy is chosen by what the robot will do.
 //!
-//! The portfolio ranks strategies by estimated overlap, which is right when the robot drives at one speed.
-//! With an attribute map the dwell uniformity matters too, and it depends on the path's shape in ways the
-//! estimate cannot see: every sharp corner is a slow-down the attribute did not ask for. So the best few
-//! strategies that meet the coverage bar and keep overlap within [`super::OVERLAP_BAR_PCT`] are linked and
-//! profiled in rank order: the first whose dwell reaches [`DWELL_GOAL_RATIO`] wins (the least overlap among
-//! those that do; the strategies the portfolio holds in reserve on large sites are prepared when none of
-//! the others does); failing that, the most uniform dwell relative to constant speed. Region-ready calls
-//! are held back until the winner is known and then replayed for it alone, so what a client was told is
-//! always the final plan.
+//! The portfolio ranks strategies by the request's objective (estimated driving time by default), which
+//! is right when the robot drives as fast as its limits allow. With an attribute map the dwell uniformity
+//! matters too, and it depends on the path's shape in ways the estimate cannot see: every sharp corner is a
+//! slow-down the attribute did not ask for. So the best few strategies that meet the coverage bar and keep
+//! overlap within [`super::OVERLAP_BAR_PCT`] are linked and profiled in rank order. Among those whose dwell
+//! reaches [`DWELL_GOAL_RATIO`] the fastest wins under the time objective (the estimate that ranked them
+//! cannot see the slow-downs the attribute asks for), the best-ranked under the others. When none reaches
+//! it, the strategies the portfolio holds in reserve on large sites get their chance, and failing that the
+//! most uniform dwell relative to constant speed wins. Region-ready calls are held back until the winner is
+//! known and then replayed for it alone, so what a client was told is always the final plan.
 
 use std::collections::VecDeque;
 
@@ -21,7 +22,7 @@ use crate::speed::{SpeedParams, SpeedProfile, profile_path};
 use super::assemble::assemble;
 use super::portfolio::{coverage_bar, economical, prepare_ranked};
 use super::prepare::Prepared;
-use super::{PlanMonitor, PlanOutput, PlanParams, RegionSummary, plan};
+use super::{Objective, PlanMonitor, PlanOutput, PlanParams, RegionSummary, plan};
 
 /// At most this many strategies are linked and profiled.
 pub const SHAPED_CANDIDATES: usize = 3;
@@ -56,13 +57,14 @@ pub fn plan_shaped(
             queue.push_back(p);
         }
     }
-    // (dwell ratio, plan, profile, held region calls) of the best candidate so far.
-    let mut best: Option<(f64, PlanOutput, SpeedProfile, Vec<Announced>)> = None;
+    // (dwell ratio, duration, plan, profile, held region calls) of the best candidate so far.
+    let mut best: Option<(f64, f64, PlanOutput, SpeedProfile, Vec<Announced>)> = None;
+    let time = params.objective == Objective::Time;
     let mut tried = 0;
     while tried < SHAPED_CANDIDATES {
         let Some(prepared) = queue.pop_front() else {
             // Nothing reached the goal: the strategies held in reserve get their chance.
-            if reserve_asked || !first_ok {
+            if reserve_asked || !first_ok || best.as_ref().is_some_and(|b| b.0 <= DWELL_GOAL_RATIO) {
                 break;
             }
             reserve_asked = true;
@@ -94,20 +96,30 @@ pub fn plan_shaped(
         } else {
             0.0
         };
+        let duration = d.duration_s;
         let wins = match &best {
             None => true,
-            Some((b, ..)) => ok && ratio + 1e-9 < *b,
+            Some((b, b_duration, ..)) => {
+                ok && if *b <= DWELL_GOAL_RATIO {
+                    // Both reach the goal: under the time objective the faster one (the estimate that ranked
+                    // them knows nothing of the slow-downs the attribute asks for); else the earlier one.
+                    time && ratio <= DWELL_GOAL_RATIO && duration + 1e-9 < *b_duration
+                } else {
+                    ratio + 1e-9 < *b
+                }
+            }
         };
         if wins {
-            best = Some((ratio, out, profile, regions));
+            best = Some((ratio, duration, out, profile, regions));
         }
-        // Candidates come least overlap first: the first that reaches the goal is the one.
-        if best.as_ref().is_some_and(|b| b.0 <= DWELL_GOAL_RATIO) {
+        // Candidates come best-ranked first: unless time decides among those that reach the goal, the first
+        // that reaches it is the one.
+        if !time && best.as_ref().is_some_and(|b| b.0 <= DWELL_GOAL_RATIO) {
             break;
         }
     }
     monitor.progress(1.0);
-    let (_, out, profile, regions) = best.ok_or(PlannerError::Cancelled)?;
+    let (_, _, out, profile, regions) = best.ok_or(PlannerError::Cancelled)?;
     for (summary, path) in &regions {
         monitor.region_ready(summary, path);
     }

@@ -43,40 +43,9 @@ struct Corner {
 
 /// Rounds the corners of `path` on `space` (see the module docs). Consecutive duplicate points are dropped.
 pub fn round_corners(space: &CoverageSpace, path: &[Waypoint], params: &SmoothParams) -> SmoothedPath {
-    let mut pts: Vec<Waypoint> = Vec::with_capacity(path.len());
-    for w in path {
-        if pts
-            .last()
-            .is_none_or(|l: &Waypoint| (l.position - w.position).norm() > 1e-9)
-        {
-            pts.push(*w);
-        } else if let Some(l) = pts.last_mut() {
-            // Keep the later waypoint's kind for the (empty) segment it ends.
-            l.kind = w.kind;
-        }
-    }
+    let pts = distinct(path);
     let n = pts.len();
-    let mut corners: Vec<Corner> = Vec::new();
-    let mut sharp = vec![false; n];
-    for i in 1..n.saturating_sub(1) {
-        let (a, c, b) = (pts[i - 1].position, pts[i].position, pts[i + 1].position);
-        let (din, dout) = (c - a, b - c);
-        let theta = heading_change(din, dout);
-        if theta < params.min_turn_rad {
-            continue;
-        }
-        let leg = params.max_leg_m.min(0.5 * din.norm()).min(0.5 * dout.norm());
-        if theta > params.max_turn_rad || leg < 1e-6 {
-            sharp[i] = true;
-            continue;
-        }
-        corners.push(Corner {
-            at: i,
-            leg,
-            u_in: din / din.norm(),
-            u_out: dout / dout.norm(),
-        });
-    }
+    let (corners, mut sharp) = find_corners(&pts, params);
     // Pieces of the unsmoothed path, split at every corner's leg ends, stamped on a count raster.
     let g = *space.geometry();
     let half = space.robot.tool_width_m / 2.0 + 1e-9;
@@ -106,7 +75,7 @@ pub fn round_corners(space: &CoverageSpace, path: &[Waypoint], params: &SmoothPa
             stamp(&mut count, b2, b, true);
         }
     }
-    let mut curves: Vec<Option<(Vec<Point2>, Vec<f64>)>> = Vec::with_capacity(corners.len());
+    let mut curves: Vec<Option<Curve>> = Vec::with_capacity(corners.len());
     let mut rounded = 0;
     for c in &corners {
         let p = pts[c.at].position;
@@ -140,6 +109,76 @@ pub fn round_corners(space: &CoverageSpace, path: &[Waypoint], params: &SmoothPa
             curves.push(Some(curve));
         }
     }
+    assemble(&pts, (&corners, &curves), &sharp, rounded)
+}
+
+/// Every corner of `path` rounded, with no check of clearance or coverage: what the path would look like to
+/// the speed profile if smoothing kept every corner it may round (reversals above `max_turn_rad` stay
+/// sharp). The planner's estimate of a plan's driving time reads it before the path is linked.
+pub fn round_every_corner(path: &[Waypoint], params: &SmoothParams) -> SmoothedPath {
+    let pts = distinct(path);
+    let (corners, sharp) = find_corners(&pts, params);
+    let curves: Vec<_> = corners
+        .iter()
+        .map(|c| Some(fillet(pts[c.at].position, c, params.samples_per_rad)))
+        .collect();
+    assemble(&pts, (&corners, &curves), &sharp, corners.len())
+}
+
+/// `path` without consecutive duplicate points; a dropped duplicate's kind goes to the point it repeats
+/// (the later waypoint's kind for the empty segment it ends).
+fn distinct(path: &[Waypoint]) -> Vec<Waypoint> {
+    let mut pts: Vec<Waypoint> = Vec::with_capacity(path.len());
+    for w in path {
+        if pts
+            .last()
+            .is_none_or(|l: &Waypoint| (l.position - w.position).norm() > 1e-9)
+        {
+            pts.push(*w);
+        } else if let Some(l) = pts.last_mut() {
+            l.kind = w.kind;
+        }
+    }
+    pts
+}
+
+/// The corners of `pts` that may be rounded, and which vertices are sharp (reversals, legs too short).
+fn find_corners(pts: &[Waypoint], params: &SmoothParams) -> (Vec<Corner>, Vec<bool>) {
+    let n = pts.len();
+    let mut corners: Vec<Corner> = Vec::new();
+    let mut sharp = vec![false; n];
+    for i in 1..n.saturating_sub(1) {
+        let (a, c, b) = (pts[i - 1].position, pts[i].position, pts[i + 1].position);
+        let (din, dout) = (c - a, b - c);
+        let theta = heading_change(din, dout);
+        if theta < params.min_turn_rad {
+            continue;
+        }
+        let leg = params.max_leg_m.min(0.5 * din.norm()).min(0.5 * dout.norm());
+        if theta > params.max_turn_rad || leg < 1e-6 {
+            sharp[i] = true;
+            continue;
+        }
+        corners.push(Corner {
+            at: i,
+            leg,
+            u_in: din / din.norm(),
+            u_out: dout / dout.norm(),
+        });
+    }
+    (corners, sharp)
+}
+
+type Curve = (Vec<Point2>, Vec<f64>);
+
+/// The smoothed path: every rounded corner's curve (`Some` in `curves`, one per corner) replaces its vertex.
+fn assemble(
+    pts: &[Waypoint],
+    (corners, curves): (&[Corner], &[Option<Curve>]),
+    sharp: &[bool],
+    rounded: usize,
+) -> SmoothedPath {
+    let n = pts.len();
     // Assemble: a rounded corner's curve replaces its vertex (its first and last samples are the leg ends).
     let mut waypoints = Vec::with_capacity(n + rounded * 16);
     let mut curvature = Vec::with_capacity(waypoints.capacity());

@@ -55,7 +55,10 @@ pub fn resample(path: &SmoothedPath, spacing_m: f64, limits: &SpeedLimits) -> Pa
             let a = wps[i - 1].position;
             let len = (w.position - a).norm();
             let n = (len / spacing_m).ceil().max(1.0) as usize;
-            let kappa = path.curvature[i - 1].min(path.curvature[i]);
+            // Inside a segment: on a curve (both ends curved) the lesser curvature; a sharp vertex is a point
+            // (κ = ∞ there only), so a straight segment between two sharp corners is straight inside.
+            let inner = |k: f64| if k.is_finite() { k } else { 0.0 };
+            let kappa = inner(path.curvature[i - 1]).min(inner(path.curvature[i]));
             for j in 1..n {
                 let p = a + (w.position - a) * (j as f64 / n as f64);
                 push(p, w.kind, w.region, kappa);
@@ -99,6 +102,20 @@ mod tests {
         assert_eq!(s.caps[4], 0.1);
         assert_eq!(s.caps[8], 0.1);
         assert!((curvature_cap(2.0, &limits) - 0.5).abs() < 1e-12);
+        // Between two sharp corners the segment is straight inside: full speed there.
+        let lane = SmoothedPath {
+            waypoints: vec![w(0.0, 0.0), w(0.0, 1.0), w(5.0, 1.0), w(5.0, 2.0)],
+            curvature: vec![0.0, f64::INFINITY, f64::INFINITY, 0.0],
+            rounded: 0,
+            kept_sharp: 2,
+        };
+        let s = resample(&lane, 0.5, &limits);
+        let inside: Vec<f64> = (0..s.points.len())
+            .filter(|&k| s.points[k].y == 1.0 && s.points[k].x > 0.0 && s.points[k].x < 5.0)
+            .map(|k| s.caps[k])
+            .collect();
+        assert_eq!(inside.len(), 9);
+        assert!(inside.iter().all(|&c| c == 1.0), "{inside:?}");
         assert_eq!(curvature_cap(1000.0, &limits), 0.1);
     }
 }

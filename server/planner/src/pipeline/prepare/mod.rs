@@ -3,8 +3,11 @@
 //! coverage target). A [`Prepared`] plan knows its coverage and, from the tour's cost, its length closely
 //! enough to rank it against other strategies before any link is searched ([`Prepared::estimate`]).
 
+mod estimate;
 #[cfg(test)]
 mod tests;
+
+pub use estimate::Estimate;
 
 use std::sync::{Arc, OnceLock};
 
@@ -13,7 +16,7 @@ use crate::error::{PlannerError, Result};
 use crate::geom::{Point2, pair_key, polyline_length};
 use crate::link::{DistancesFrom, LinkParams, Linker, geodesic_matrix};
 use crate::map::DistanceField;
-use crate::metrics::{CoverageRaster, coverage_of};
+use crate::metrics::CoverageRaster;
 use crate::order::{DistanceMatrix, SolveBudget, Tour, TourOption, TourProblem};
 use crate::pattern::boundary::{candidates, select};
 use crate::pattern::contour::trace_cells;
@@ -54,26 +57,6 @@ pub struct Prepared {
     pub(crate) linked: Linked,
     /// What this plan is expected to give, before linking.
     pub estimate: Estimate,
-}
-
-/// A prepared plan's expected metrics: coverage of the tasks and in-region steps, and the length of the tour
-/// (tasks, straight steps, geodesic transits). Links only add length (they bend around what a straight step
-/// or a geodesic cuts) and coverage, so the estimate ranks strategies the way their final plans rank.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Estimate {
-    /// Share of coverable cells covered, percent.
-    pub coverage_pct: f64,
-    /// Expected path length, metres.
-    pub length_m: f64,
-    /// (length × tool width − covered area) / covered area, percent (DESIGN §6).
-    pub overlap_pct: f64,
-}
-
-impl Estimate {
-    /// Meets the coverage bar of DESIGN §6 (a prepared plan never collides: every piece is checked).
-    pub fn good(&self, target_pct: f64) -> bool {
-        self.coverage_pct + 1e-9 >= target_pct
-    }
 }
 
 /// The distance field whose sites are the reachable cells (each coverable cell is served by the region of
@@ -265,7 +248,7 @@ pub fn prepare(
     // the walls cover other nooks. What the driven routes leave below the coverage target gets more passes
     // (and new routes and order), a bounded number of times.
     let mut driven = driven_raster(walls, (&tasks, &options), (&active, &tour));
-    let mut estimate = estimate_of(space, &driven, tour.cost);
+    let mut estimate = Estimate::of(walls, params, &driven, (&tasks, &options), (&active, &tour));
     for _ in 0..TOP_UPS {
         let short = params.passes.coverage_target_pct - TOP_UP_TOLERANCE_PCT;
         if !params.targeted_passes || estimate.coverage_pct + 1e-9 >= short {
@@ -286,7 +269,7 @@ pub fn prepare(
         (active, tour) = visit_order(space, params, &options, dock, monitor);
         check(monitor)?;
         driven = driven_raster(walls, (&tasks, &options), (&active, &tour));
-        estimate = estimate_of(space, &driven, tour.cost);
+        estimate = Estimate::of(walls, params, &driven, (&tasks, &options), (&active, &tour));
     }
     monitor.progress(0.75);
     Ok(Prepared {
@@ -430,15 +413,6 @@ fn driven_raster(
         stamp_route(walls, &mut driven, &options[id][o], &tasks[id], true);
     }
     driven
-}
-
-fn estimate_of(space: &CoverageSpace, raster: &CoverageRaster, length_m: f64) -> Estimate {
-    let c = coverage_of(space, raster, length_m);
-    Estimate {
-        coverage_pct: c.coverage_pct,
-        length_m,
-        overlap_pct: c.overlap_pct,
-    }
 }
 
 /// Stamps the steps between the legs of `route` on `raster` — along the wall where they follow it, else

@@ -5,7 +5,10 @@
 //! - *reachable*: the 8-connected traversable component holding the start (seed 004, Alg. 1 — a flood fill);
 //! - *coverable*: free cells within `tool_width / 2` of a reachable cell.
 //!
-//! A start that is not traversable snaps to the nearest traversable cell, with a warning.
+//! A start that is not traversable snaps to the nearest traversable cell, with a warning; a start whose
+//! piece of traversable space is small is reported, and may be moved into the largest piece ([`start`]).
+
+pub mod start;
 
 use std::collections::VecDeque;
 
@@ -63,7 +66,21 @@ pub struct CoverageSpace {
 impl CoverageSpace {
     /// Derives the spaces for `robot` starting at `start` (map frame, metres).
     pub fn new(grid: OccupancyGrid, robot: RobotShape, start: Point2) -> Result<Self> {
+        Self::with_start_snap(grid, robot, start, None)
+    }
+
+    /// As [`CoverageSpace::new`]; when the start's traversable piece is small (see [`start`]) and a cell of
+    /// the largest piece lies within `snap_within_m` metres of `start`, the start moves there.
+    pub fn with_start_snap(
+        grid: OccupancyGrid,
+        robot: RobotShape,
+        start: Point2,
+        snap_within_m: Option<f64>,
+    ) -> Result<Self> {
         robot.validate()?;
+        if let Some(d) = snap_within_m {
+            finite("snap_start_m", d)?;
+        }
         finite("start x", start.x)?;
         finite("start y", start.y)?;
         let g = grid.geometry;
@@ -111,7 +128,14 @@ impl CoverageSpace {
             ));
             (c, p)
         };
-        let reachable = flood_fill8(&g, &traversable, start_cell);
+        let choice = start::weigh_start(&g, &traversable, (start_pt, start_cell), snap_within_m);
+        warnings.extend(choice.warning);
+        let (start_cell, start_pt) = if choice.snapped {
+            (choice.cell, g.center(choice.cell))
+        } else {
+            (start_cell, start_pt)
+        };
+        let reachable = choice.reachable;
         let to_reachable = DistanceField::compute(g, |i| reachable[i], false);
         let half = robot.tool_width_m / 2.0 + 1e-9;
         let coverable = (0..g.len())
@@ -242,6 +266,26 @@ impl CoverageSpace {
     /// Number of coverable cells.
     pub fn coverable_count(&self) -> usize {
         self.coverable.iter().filter(|&&r| r).count()
+    }
+
+    fn cell_area_m2(&self) -> f64 {
+        let r = self.geometry().resolution;
+        r * r
+    }
+
+    /// Area of the reachable cells (where the robot's centre can go from the start), m².
+    pub fn reachable_area_m2(&self) -> f64 {
+        self.reachable_count() as f64 * self.cell_area_m2()
+    }
+
+    /// Area of the coverable cells (what a complete plan covers), m².
+    pub fn coverable_area_m2(&self) -> f64 {
+        self.coverable_count() as f64 * self.cell_area_m2()
+    }
+
+    /// Area of the free cells of the whole map, m².
+    pub fn free_area_m2(&self) -> f64 {
+        (0..self.grid.cells.len()).filter(|&i| self.grid.is_free(i)).count() as f64 * self.cell_area_m2()
     }
 }
 
