@@ -136,7 +136,10 @@ async fn plans_and_sites_list_newest_first_in_pages() -> Result<()> {
         .cloned()
         .collect();
     assert_eq!(all_pages(&server, "&site=demo&status=ready", 2).await?, demo_ready);
-    assert_eq!(all_pages(&server, "&robot=r9", 5).await?, [assigned.clone()]);
+    assert_eq!(
+        all_pages(&server, "&robot=r9", 5).await?,
+        std::slice::from_ref(&assigned)
+    );
     assert!(all_pages(&server, "&site=nowhere", 5).await?.is_empty());
 
     // A plan accepted between two pages shows on a fresh first page only: the cursor keeps its place.

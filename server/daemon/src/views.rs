@@ -81,7 +81,7 @@ impl Views {
             .map(|v| &v.record)
             .filter(|r| before_seq.is_none_or(|b| r.seq < b) && keep(r))
             .collect();
-        hits.sort_unstable_by(|a, b| b.seq.cmp(&a.seq));
+        hits.sort_unstable_by_key(|r| std::cmp::Reverse(r.seq));
         let more = hits.len() > limit;
         (hits.into_iter().take(limit).map(|r| r.to_response()).collect(), more)
     }
