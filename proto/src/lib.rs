@@ -9,6 +9,7 @@ pub mod attribute;
 pub mod correction;
 pub mod error;
 pub mod keys;
+pub mod listing;
 pub mod plan;
 pub mod ros;
 pub mod scene;
@@ -21,5 +22,6 @@ pub use api::{
 pub use attribute::{AttributeBlobDoc, AttributeDoc};
 pub use correction::{CorrectionDoc, CorrectionError, CorrectionReason};
 pub use error::CodecError;
+pub use listing::{OccupancyGridDoc, PLAN_PAGE_DEFAULT, PLAN_PAGE_MAX, PlanList, PlanListQuery, SiteList};
 pub use plan::{PlanDocument, PlanMetricsDoc, RegionDoc, WaypointDoc, WaypointKindDoc};
 pub use scene::SceneFile;

@@ -33,6 +33,24 @@ impl Path {
     }
 }
 
+/// A plan's waypoints as nav_msgs/Path poses `(x metres, y metres, yaw radians)` in the plan's frame, the yaw
+/// along the path (towards the next waypoint; the last one keeps its predecessor's heading). The daemon's
+/// `…/plan_path` messages and the clients' nav_msgs/Path exports are built from this.
+pub fn plan_poses(doc: &crate::plan::PlanDocument) -> Vec<(f64, f64, f64)> {
+    let w = &doc.waypoints;
+    (0..w.len())
+        .map(|i| {
+            let (a, b) = if i + 1 < w.len() {
+                (i, i + 1)
+            } else {
+                (i.saturating_sub(1), i)
+            };
+            let yaw = (w[b].y - w[a].y).atan2(w[b].x - w[a].x);
+            (w[i].x, w[i].y, if yaw.is_finite() { yaw } else { 0.0 })
+        })
+        .collect()
+}
+
 /// Encodes a planar path as a little-endian nav_msgs/Path CDR payload (byte-identical to rosbags): each pose is
 /// (x metres, y metres, yaw radians) in `header.frame_id`, written with z = 0, the quaternion
 /// (0, 0, sin(yaw/2), cos(yaw/2)) and a copy of `header`.

@@ -5,7 +5,8 @@ use std::collections::{BTreeMap, HashMap};
 use std::sync::{Arc, RwLock};
 
 use shift_engine::PlanRecord;
-use shift_proto::{PlanDocument, PlanStatus, RegionReady, RobotView, SiteSummary};
+use shift_planner::map::OccupancyGrid;
+use shift_proto::{PlanDocument, PlanStatus, PlanStatusResponse, RegionReady, RobotView, SiteSummary};
 
 /// One plan as the API shows it.
 #[derive(Debug, Clone)]
@@ -24,6 +25,7 @@ pub struct Views {
     /// when the plan leaves `planning` (its document then holds everything).
     regions: RwLock<HashMap<String, Vec<RegionReady>>>,
     sites: RwLock<BTreeMap<String, SiteSummary>>,
+    site_maps: RwLock<HashMap<String, Arc<OccupancyGrid>>>,
     robots: RwLock<BTreeMap<String, RobotView>>,
 }
 
@@ -36,6 +38,52 @@ impl Views {
     /// A site's summary.
     pub fn site(&self, site: &str) -> Option<SiteSummary> {
         self.sites.read().ok()?.get(site).cloned()
+    }
+
+    /// Every site's summary, in name order.
+    pub fn sites(&self) -> Vec<SiteSummary> {
+        self.sites
+            .read()
+            .map(|s| s.values().cloned().collect())
+            .unwrap_or_default()
+    }
+
+    /// A site's thresholded map.
+    pub fn site_map(&self, site: &str) -> Option<Arc<OccupancyGrid>> {
+        self.site_maps.read().ok()?.get(site).cloned()
+    }
+
+    /// Sets a site's map (at upload and restore).
+    pub fn set_site_map(&self, site: &str, grid: Arc<OccupancyGrid>) {
+        if let Ok(mut maps) = self.site_maps.write() {
+            maps.insert(site.to_owned(), grid);
+        }
+    }
+
+    /// The acceptance number of a plan (its place in listings).
+    pub fn plan_seq(&self, plan_id: &str) -> Option<u64> {
+        Some(self.plans.read().ok()?.get(plan_id)?.record.seq)
+    }
+
+    /// Up to `limit` plans accepted before `before_seq` (all when `None`) that `keep` accepts, newest first,
+    /// and whether more such plans follow.
+    pub fn plans_page(
+        &self,
+        before_seq: Option<u64>,
+        limit: usize,
+        keep: impl Fn(&PlanRecord) -> bool,
+    ) -> (Vec<PlanStatusResponse>, bool) {
+        let Ok(plans) = self.plans.read() else {
+            return (Vec::new(), false);
+        };
+        let mut hits: Vec<&Arc<PlanRecord>> = plans
+            .values()
+            .map(|v| &v.record)
+            .filter(|r| before_seq.is_none_or(|b| r.seq < b) && keep(r))
+            .collect();
+        hits.sort_unstable_by_key(|r| std::cmp::Reverse(r.seq));
+        let more = hits.len() > limit;
+        (hits.into_iter().take(limit).map(|r| r.to_response()).collect(), more)
     }
 
     /// Regions a planning plan has streamed so far, in order.

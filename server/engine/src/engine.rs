@@ -93,6 +93,7 @@ impl Engine {
                 out.push(Command::SiteStatic {
                     site: site.record.site.clone(),
                     clearance: site.map.clearance.clone(),
+                    grid: site.map.grid.clone(),
                 });
                 let last_fed_ms = self.sites.get(&site.record.site).map_or(0, |s| s.last_fed_ms);
                 self.sites

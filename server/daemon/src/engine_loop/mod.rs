@@ -142,7 +142,10 @@ impl EngineLoop {
                     None => tracing::warn!(robot, "zenoh is disabled: the plan is only served over HTTP"),
                 },
                 Command::RobotChanged(view) => p.views.set_robot(view),
-                Command::SiteStatic { site, clearance } => p.live.set_static(&site, clearance),
+                Command::SiteStatic { site, clearance, grid } => {
+                    p.views.set_site_map(&site, grid);
+                    p.live.set_static(&site, clearance);
+                }
                 Command::StartCheck(job) => self.checks.start(*job),
                 Command::StoreCorrection {
                     record,

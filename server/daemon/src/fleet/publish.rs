@@ -10,7 +10,7 @@
 use std::sync::Arc;
 
 use shift_proto::keys::KeySpace;
-use shift_proto::ros::path::encode_path;
+use shift_proto::ros::path::{encode_path, plan_poses};
 use shift_proto::ros::{Header, Time};
 use shift_proto::{CorrectionDoc, PlanDocument, PlanStatusResponse};
 use tokio::sync::mpsc;
@@ -43,22 +43,6 @@ impl Outgoing {
 #[derive(Debug, Clone)]
 pub struct Publisher {
     tx: mpsc::Sender<Outgoing>,
-}
-
-/// Plan document → nav_msgs/Path poses `(x, y, yaw)`, yaw along the path.
-fn path_poses(doc: &PlanDocument) -> Vec<(f64, f64, f64)> {
-    let w = &doc.waypoints;
-    (0..w.len())
-        .map(|i| {
-            let (a, b) = if i + 1 < w.len() {
-                (i, i + 1)
-            } else {
-                (i.saturating_sub(1), i)
-            };
-            let yaw = (w[b].y - w[a].y).atan2(w[b].x - w[a].x);
-            (w[i].x, w[i].y, if yaw.is_finite() { yaw } else { 0.0 })
-        })
-        .collect()
 }
 
 impl Publisher {
@@ -122,7 +106,7 @@ async fn put(session: &zenoh::Session, keys: &KeySpace, msg: Outgoing) {
                 stamp: Time { sec: 0, nanosec: 0 },
                 frame_id: doc.frame.clone(),
             };
-            let cdr = encode_path(&header, &path_poses(&doc));
+            let cdr = encode_path(&header, &plan_poses(&doc));
             let put = session.put(&path_key, cdr).encoding(Encoding::APPLICATION_CDR);
             if let Err(e) = put.congestion_control(CongestionControl::Block).await {
                 tracing::warn!(robot, "publishing the ROS path: {e}");

@@ -4,6 +4,7 @@
 mod auth;
 pub mod error;
 mod events;
+mod listings;
 mod openapi;
 mod ops;
 mod plans;
@@ -63,9 +64,13 @@ pub struct AppState {
 /// The whole API.
 pub fn router(state: AppState) -> Router {
     let api = Router::new()
-        .route("/v1/sites/{site}/map", post(sites::upload_map))
+        .route("/v1/sites", get(listings::list_sites))
+        .route(
+            "/v1/sites/{site}/map",
+            post(sites::upload_map).get(listings::get_site_map),
+        )
         .route("/v1/sites/{site}", get(sites::get_site))
-        .route("/v1/plans", post(plans::create_plan))
+        .route("/v1/plans", post(plans::create_plan).get(listings::list_plans))
         .route("/v1/plans/{id}", get(plans::get_plan).delete(plans::cancel_plan))
         .route("/v1/plans/{id}/path", get(plans::get_path))
         .route("/v1/plans/{id}/speed-profile", get(plans::get_speed_profile))

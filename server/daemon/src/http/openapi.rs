@@ -12,6 +12,9 @@ use utoipa::OpenApi;
     paths(
         super::sites::upload_map,
         super::sites::get_site,
+        super::listings::list_sites,
+        super::listings::get_site_map,
+        super::listings::list_plans,
         super::plans::create_plan,
         super::plans::get_plan,
         super::plans::get_path,

@@ -155,6 +155,8 @@ pub enum Command {
         site: String,
         /// Distance to the static map's non-free cells, metres.
         clearance: Arc<shift_planner::map::DistanceField>,
+        /// The thresholded map itself (what `GET /v1/sites/{site}/map` answers).
+        grid: Arc<shift_planner::map::OccupancyGrid>,
     },
     /// Persist a plan record (a status change) and update the read model.
     StorePlan(PlanRecord),

@@ -130,6 +130,7 @@ impl Engine {
             out.push(Command::SiteStatic {
                 site: site.record.site.clone(),
                 clearance: site.map.clearance.clone(),
+                grid: site.map.grid.clone(),
             });
             self.sites.insert(site.record.site.clone(), site);
         }

@@ -1,0 +1,227 @@
+//! The command line (clap derive).
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use shift_client::DEFAULT_BASE_URL;
+
+/// Operate a SHIFT daemon: sites, plans, exports, pictures, robots.
+///
+/// Exit codes: 0 ok, 1 the server said no (or could not be reached), 2 bad input (arguments, local files).
+#[derive(Debug, Parser)]
+#[command(name = "shiftctl", version)]
+pub struct Cli {
+    /// The daemon's HTTP address.
+    #[arg(long, global = true, env = "SHIFT_HTTP", default_value = DEFAULT_BASE_URL)]
+    pub http: String,
+    /// Bearer token for mutating routes (when the daemon has `auth_token` set).
+    #[arg(long, global = true, env = "SHIFT_TOKEN", hide_env_values = true)]
+    pub token: Option<String>,
+    /// Machine-readable output: the API's JSON on stdout (one document, or one per line for streams).
+    #[arg(long, global = true)]
+    pub json: bool,
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The commands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// A site: upload its map, show its summary.
+    Site {
+        /// What to do with it.
+        #[command(subcommand)]
+        action: SiteAction,
+    },
+    /// Every site with its summary.
+    Sites,
+    /// Ask for a plan (`plan --site S --start X,Y`), or `plan show|cancel|assign ID`.
+    Plan(PlanArgs),
+    /// List plans, newest first.
+    Plans(PlansArgs),
+    /// Write a plan's path as GeoJSON, CSV or nav_msgs/Path JSON.
+    Export(ExportArgs),
+    /// Draw a plan on its site's map as a PNG.
+    Render(RenderArgs),
+    /// Every robot: alive or lost, pose, plan, progress.
+    Robots,
+    /// Follow a Zenoh stream.
+    Tail {
+        /// Which stream.
+        #[command(subcommand)]
+        stream: TailStream,
+    },
+}
+
+/// `site …`.
+#[derive(Debug, Subcommand)]
+pub enum SiteAction {
+    /// Upload a map_server map (the YAML and the image it names) as SITE's map.
+    Upload {
+        /// Site name (letters, digits, '-', '_').
+        site: String,
+        /// The map_server YAML; its `image` is read relative to it.
+        #[arg(long)]
+        yaml: PathBuf,
+    },
+    /// A site's summary.
+    Show {
+        /// Site name.
+        site: String,
+    },
+}
+
+/// `plan …`.
+#[derive(Debug, Args)]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
+pub struct PlanArgs {
+    /// show, cancel or assign an existing plan.
+    #[command(subcommand)]
+    pub action: Option<PlanAction>,
+    /// Site to plan on.
+    #[arg(long, required = true)]
+    pub site: Option<String>,
+    /// Start and return point X,Y (metres, map frame).
+    #[arg(long, required = true, value_name = "X,Y", allow_hyphen_values = true)]
+    pub start: Option<String>,
+    /// Robot footprint radius, metres.
+    #[arg(long, default_value_t = 0.15)]
+    pub robot_radius: f64,
+    /// Tool width, metres.
+    #[arg(long, default_value_t = 0.3)]
+    pub tool_width: f64,
+    /// Slowest cover speed, m/s.
+    #[arg(long, default_value_t = 0.1)]
+    pub v_min: f64,
+    /// Fastest speed, m/s.
+    #[arg(long, default_value_t = 1.0)]
+    pub v_max: f64,
+    /// Largest acceleration, m/s².
+    #[arg(long, default_value_t = 0.5)]
+    pub a_max: f64,
+    /// Only cover inside this polygon: "X,Y X,Y X,Y …" (metres, map frame).
+    #[arg(long, value_name = "POLYGON", allow_hyphen_values = true)]
+    pub region: Option<String>,
+    /// Attribute map: a JSON file `{"blobs": [{"x", "y", "sigma", "amplitude"}]}`.
+    #[arg(long, value_name = "FILE")]
+    pub attribute: Option<PathBuf>,
+    /// Decomposition (auto, bcd, walls, voronoi, grid, none).
+    #[arg(long)]
+    pub decomposition: Option<String>,
+    /// Visiting order (two-opt, rrt, anneal).
+    #[arg(long)]
+    pub order: Option<String>,
+    /// In-region pattern (lanes, spiral).
+    #[arg(long)]
+    pub pattern: Option<String>,
+    /// Seed for every random choice.
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Follow the computation: a progress bar fed by the plan's events, then the metrics.
+    #[arg(long)]
+    pub watch: bool,
+}
+
+/// `plan show|cancel|assign`.
+#[derive(Debug, Subcommand)]
+pub enum PlanAction {
+    /// Status, progress and metrics.
+    Show {
+        /// Plan id.
+        id: String,
+    },
+    /// Cancel a queued or planning plan.
+    Cancel {
+        /// Plan id.
+        id: String,
+    },
+    /// Send a computed plan to a robot.
+    Assign {
+        /// Plan id.
+        id: String,
+        /// Robot id.
+        robot: String,
+    },
+}
+
+/// `plans`.
+#[derive(Debug, Args)]
+pub struct PlansArgs {
+    /// Only this site's plans.
+    #[arg(long)]
+    pub site: Option<String>,
+    /// Only plans in this state (queued, planning, ready, active, done, failed, cancelled).
+    #[arg(long)]
+    pub status: Option<String>,
+    /// Only plans assigned to this robot.
+    #[arg(long)]
+    pub robot: Option<String>,
+    /// Plans per page (1-500).
+    #[arg(long)]
+    pub limit: Option<u32>,
+    /// Continue after this cursor (the `next` of a previous page).
+    #[arg(long)]
+    pub after: Option<String>,
+    /// Follow every page (else one page).
+    #[arg(long)]
+    pub all: bool,
+}
+
+/// Export formats.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Format {
+    /// A FeatureCollection: the path as a LineString with per-point `v`, `t`, `kind`, and the regions.
+    Geojson,
+    /// `x,y,v,t,kind`, one row per waypoint.
+    Csv,
+    /// nav_msgs/Path as JSON (map frame, yaw along the path).
+    NavPath,
+}
+
+/// `export`.
+#[derive(Debug, Args)]
+pub struct ExportArgs {
+    /// Plan id.
+    pub plan: String,
+    /// Output format.
+    #[arg(long, value_enum)]
+    pub format: Format,
+    /// Write here instead of stdout.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+/// `render`.
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// Plan id.
+    pub plan: String,
+    /// PNG to write.
+    pub out: PathBuf,
+    /// Long side of the map part of the picture, pixels.
+    #[arg(long, default_value_t = 1000, value_parser = clap::value_parser!(u32).range(100..=8000))]
+    pub size: u32,
+}
+
+/// `tail …`.
+#[derive(Debug, Subcommand)]
+pub enum TailStream {
+    /// Print the corrections the daemon sends to ROBOT as they arrive.
+    Corrections {
+        /// Robot id.
+        robot: String,
+        /// Zenoh endpoint to connect to (peer mode, no scouting).
+        #[arg(long, default_value = "tcp/127.0.0.1:7447")]
+        zenoh: String,
+        /// Key prefix.
+        #[arg(long, default_value = "shift")]
+        prefix: String,
+        /// Fleet.
+        #[arg(long, default_value = "default")]
+        fleet: String,
+        /// Stop after this many corrections.
+        #[arg(long)]
+        count: Option<u64>,
+    },
+}
