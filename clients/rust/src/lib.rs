@@ -24,6 +24,8 @@
 //!         attribute: None,
 //!         region: None,
 //!         options: None,
+//!         objective: None,
+//!         snap_start_m: None,
 //!     })
 //!     .await?;
 //! let mut events = client.events(&accepted.plan_id).await?;

@@ -25,6 +25,8 @@ impl Client {
     ///     attribute: None,
     ///     region: None,
     ///     options: None,
+    ///     objective: None,
+    ///     snap_start_m: None,
     /// };
     /// let accepted = client.create_plan(&request).await?;
     /// println!("plan {}", accepted.plan_id);

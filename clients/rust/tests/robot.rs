@@ -85,6 +85,8 @@ async fn a_robot_follows_its_plan_and_a_correction_and_tail_prints_it() -> Resul
             attribute: None,
             region: None,
             options: None,
+            objective: None,
+            snap_start_m: None,
         })
         .await?;
     let id = accepted.plan_id;

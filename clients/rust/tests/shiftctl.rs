@@ -113,6 +113,8 @@ async fn every_command_against_a_real_daemon() -> Result<()> {
             "0.15",
             "--tool-width",
             "0.3",
+            "--objective",
+            "time",
         ],
     )
     .await?;
@@ -200,6 +202,7 @@ async fn every_command_against_a_real_daemon() -> Result<()> {
         &["plan", "--site", "demo"],
         &["plan", "--site", "demo", "--start", "0,0", "--tool-width", "-1"],
         &["plan", "--site", "demo", "--start", "0,0", "--region", "0,0 1,1"],
+        &["plan", "--site", "demo", "--start", "0,0", "--objective", "fastest"],
         &["export", &id, "--format", "kml"],
         &["plans", "--status", "busy"],
         &["plans", "--limit", "0"],

@@ -118,6 +118,12 @@ pub struct PlanArgs {
     /// Seed for every random choice.
     #[arg(long)]
     pub seed: Option<u64>,
+    /// What the plan minimises among those that cover ≥ 99 % (time, length, overlap, turns; default time).
+    #[arg(long)]
+    pub objective: Option<String>,
+    /// Move a start whose traversable piece is small into the largest piece when it is this close, metres.
+    #[arg(long, value_name = "M")]
+    pub snap_start_m: Option<f64>,
     /// Follow the computation: a progress bar fed by the plan's events, then the metrics.
     #[arg(long)]
     pub watch: bool,

@@ -4,7 +4,7 @@ use std::path::Path;
 
 use anyhow::Context as _;
 use shift_client::Client;
-use shift_client::proto::{AttributeDoc, PlanListQuery, PlanOptions, PlanRequest, RobotSpec};
+use shift_client::proto::{AttributeDoc, PlanListQuery, PlanObjective, PlanOptions, PlanRequest, RobotSpec};
 
 use crate::cli::{PlanAction, PlanArgs, PlansArgs, SiteAction};
 use crate::input::{bad, point, polygon, status};
@@ -119,6 +119,17 @@ fn request(args: &PlanArgs) -> anyhow::Result<PlanRequest> {
         attribute,
         region,
         options: (options != PlanOptions::default()).then_some(options),
+        objective: match &args.objective {
+            None => None,
+            Some(name) => Some(
+                serde_json::from_value::<PlanObjective>(serde_json::Value::String(name.clone())).map_err(|_| {
+                    bad(format!(
+                        "--objective {name}: expected one of time, length, overlap, turns"
+                    ))
+                })?,
+            ),
+        },
+        snap_start_m: args.snap_start_m,
     })
 }
 
