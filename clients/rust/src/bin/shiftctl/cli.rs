@@ -27,6 +27,8 @@ pub struct Cli {
 
 /// The commands.
 #[derive(Debug, Subcommand)]
+// Parsed once per run: the size of the largest variant (plan's many options) costs nothing.
+#[allow(clippy::large_enum_variant)]
 pub enum Command {
     /// A site: upload its map, show its summary.
     Site {
