@@ -60,9 +60,9 @@ impl std::str::FromStr for Objective {
 
 /// How close, relative, two estimated driving times must be to count as equal: the estimate drives a sketch
 /// of the path with every corner rounded as smoothing may round it, and the final profile differs by up to
-/// about 2 % (measured on the shared scenes and the generated fields of `tests/objective.rs`: 594 s
-/// estimated against 605 s driven, 3 335 s against 3 324 s). Within it the least overlap wins: the same time
-/// with less double sweeping (wear, water, energy).
+/// about 2 % (one measured pair: the undivided fitted lanes on four-rooms-cluttered, 594 s estimated against
+/// 605 s driven; more pairs are still to be measured). Within it the least overlap wins: the same time with
+/// less double sweeping (wear, water, energy).
 pub const TIME_TIE: f64 = 0.02;
 
 /// Sort keys of `estimates`, best first when sorted ascending: plans that meet the coverage bar
