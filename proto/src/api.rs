@@ -57,6 +57,19 @@ fn default_a_max() -> f64 {
     0.5
 }
 
+impl RobotSpec {
+    /// A robot of `radius` and `tool_width` (metres) with the API's default speed and acceleration limits.
+    pub fn new(radius: f64, tool_width: f64) -> Self {
+        Self {
+            radius,
+            tool_width,
+            v_min: default_v_min(),
+            v_max: default_v_max(),
+            a_max: default_a_max(),
+        }
+    }
+}
+
 /// Planner choices; every field optional, the defaults are the best combination.
 #[derive(Debug, Clone, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
@@ -104,6 +117,22 @@ pub struct PlanRequest {
     /// is within this many metres. Absent: the start stays, and the plan's warnings say where it leads.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub snap_start_m: Option<f64>,
+}
+
+impl PlanRequest {
+    /// A request for `robot` on `site` from `start` with every optional field absent (the defaults).
+    pub fn new(site: impl Into<String>, start: [f64; 2], robot: RobotSpec) -> Self {
+        Self {
+            site: site.into(),
+            start,
+            robot,
+            attribute: None,
+            region: None,
+            options: None,
+            objective: None,
+            snap_start_m: None,
+        }
+    }
 }
 
 /// What a plan minimises (DESIGN §6), subject to the coverage bar.

@@ -4,6 +4,7 @@
 
 use shift_planner::decompose::DecompositionMethod;
 use shift_planner::geom::Point2;
+pub use shift_planner::geom::point_in_polygon;
 use shift_planner::map::grid::OccupancyGrid;
 use shift_planner::order::OrderMethod;
 use shift_planner::pattern::PatternMethod;
@@ -131,20 +132,6 @@ pub fn validate(req: &PlanRequest, grid: &OccupancyGrid) -> Result<ParsedOptions
         }
     }
     parse_options(req)
-}
-
-/// Even-odd point-in-polygon test; `poly` is `[[x, y], …]`, implicitly closed.
-pub fn point_in_polygon(p: Point2, poly: &[[f64; 2]]) -> bool {
-    let mut inside = false;
-    let n = poly.len();
-    for i in 0..n {
-        let [xi, yi] = poly[i];
-        let [xj, yj] = poly[(i + n - 1) % n];
-        if (yi > p.y) != (yj > p.y) && p.x < (xj - xi) * (p.y - yi) / (yj - yi) + xi {
-            inside = !inside;
-        }
-    }
-    inside
 }
 
 #[cfg(test)]

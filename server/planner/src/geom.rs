@@ -16,6 +16,20 @@ pub fn point_segment_distance(p: Point2, a: Point2, b: Point2) -> f64 {
     (p - (a + ab * t)).norm()
 }
 
+/// Even-odd point-in-polygon test; `poly` is `[[x, y], …]`, implicitly closed.
+pub fn point_in_polygon(p: Point2, poly: &[[f64; 2]]) -> bool {
+    let mut inside = false;
+    let n = poly.len();
+    for i in 0..n {
+        let [xi, yi] = poly[i];
+        let [xj, yj] = poly[(i + n - 1) % n];
+        if (yi > p.y) != (yj > p.y) && p.x < (xj - xi) * (p.y - yi) / (yj - yi) + xi {
+            inside = !inside;
+        }
+    }
+    inside
+}
+
 /// True when the segments `a`–`b` and `c`–`d` cross at a point inside both (touching ends do not count).
 pub fn segments_cross(a: Point2, b: Point2, c: Point2, d: Point2) -> bool {
     let side = |p: Point2, q: Point2, r: Point2| (q - p).perp(&(r - p));

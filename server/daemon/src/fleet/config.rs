@@ -60,8 +60,9 @@ pub struct ZenohConfig {
     pub robot_timeout_s: u64,
     /// Odometry kept per robot to place scans and robot-frame clouds at their stamps, seconds.
     pub pose_history_s: f64,
-    /// A scan stamped up to this long after the newest pose (or before the oldest) takes that end pose;
-    /// beyond, it is dropped and counted, milliseconds.
+    /// A scan stamped up to this long after the newest pose (once it has waited `sensor_wait_ms` for odometry
+    /// that covers its stamp), or before the oldest, takes that end pose; beyond, it is dropped and counted,
+    /// milliseconds.
     pub scan_stamp_tolerance_ms: u64,
     /// Laser position in the robot frame (x forward, y left), metres.
     pub scan_offset_x_m: f64,

@@ -471,7 +471,10 @@ impl SensorHub {
                 received_ms,
                 deadline_ms,
             } = w;
-            match self.place(robot, msg) {
+            // Before its deadline a message stamped after the newest pose waits for the odometry that covers it
+            // (as tf2's message filter does); only then does the end pose within the tolerance stand in.
+            let patient = now_ms < deadline_ms;
+            match self.place(robot, msg, patient) {
                 Step::Placed(points) => {
                     let r = self.robot(robot);
                     r.counts.placed += 1;
@@ -510,15 +513,20 @@ impl SensorHub {
     }
 
     /// Map-frame points of one message, or why it must wait or go.
-    fn place(&self, robot: &str, msg: Decoded) -> Step {
+    /// `patient`: a stamp after the newest pose waits rather than take the newest pose (within the tolerance).
+    fn place(&self, robot: &str, msg: Decoded, patient: bool) -> Step {
         let history = self.robots.get(robot).map(|r| &r.history);
         let lookup = |stamp_ns: i64| -> Result<Pose2, PoseLookupError> {
             let h = history.ok_or(PoseLookupError::Empty)?;
             if stamp_ns == 0 {
                 // Unstamped: the latest pose is the best there is.
-                h.latest().ok_or(PoseLookupError::Empty)
-            } else {
-                h.at(stamp_ns)
+                return h.latest().ok_or(PoseLookupError::Empty);
+            }
+            match h.latest() {
+                Some(newest) if patient && stamp_ns > newest.stamp_ns => Err(PoseLookupError::Future {
+                    ahead_ns: stamp_ns - newest.stamp_ns,
+                }),
+                _ => h.at(stamp_ns),
             }
         };
         match msg {

@@ -116,6 +116,29 @@ fn a_scan_that_arrives_before_its_odometry_waits_for_it() {
 }
 
 #[test]
+fn a_scan_just_ahead_of_the_newest_pose_waits_for_the_next_one_before_the_tolerance_stands_in() {
+    let mut h = hub(Some("demo"));
+    h.odometry("r1", odom(0.0, SEC), 0);
+    // 50 ms after the newest pose: within the 0.1 s tolerance, yet the odometry at its stamp is on its way.
+    assert!(
+        h.sensor("r1", Stream::Scan, &scan(SEC + SEC / 20), 10).is_empty(),
+        "waits"
+    );
+    let out = h.odometry("r1", odom(1.0, SEC + SEC / 10), 20);
+    let p = placed(&out.released);
+    // Interpolated halfway: robot at x = 0.5, beam 1 m ahead (the end pose would have said 1.0).
+    assert!((p[0].points[0][0] - 1.5).abs() < 1e-6, "{:?}", p[0].points);
+    // With no newer odometry by its deadline, the end pose within the tolerance stands in.
+    assert!(
+        h.sensor("r1", Stream::Scan, &scan(SEC + SEC / 10 + SEC / 20), 30)
+            .is_empty()
+    );
+    let out = h.expire(530);
+    let p = placed(&out);
+    assert!((p[0].points[0][0] - 2.0).abs() < 1e-6, "{:?}", p[0].points);
+}
+
+#[test]
 fn a_scan_whose_odometry_never_comes_is_dropped_at_its_deadline_with_the_lookup_reason() {
     let mut h = hub(Some("demo"));
     h.odometry("r1", odom(0.0, SEC), 0);

@@ -1,0 +1,253 @@
+//! Following a plan's waypoints: pure pursuit toward the current target at the plan's speed, with seed 003's
+//! dynamic tracking (§ "dynamic tracking", Alg. 2). The following threshold `mu` is a distance in metres: once
+//! the robot is closer than `mu` to its target it takes the next one without stopping; `mu = 0` is classic
+//! goal-by-goal navigation that brakes to a stop on every target and turns on the spot toward the next.
+
+use shift_proto::{WaypointDoc, WaypointKindDoc};
+
+use crate::drive::{DiffDrive, Limits, wrap};
+
+/// Within this distance of a target the robot has reached it when it stops there (mu = 0), metres.
+const ARRIVE_M: f64 = 0.03;
+/// Below this speed the robot counts as stopped, m/s.
+const STOPPED_MPS: f64 = 0.01;
+/// A target further off the heading than this is turned to on the spot first, radians.
+const TURN_ON_SPOT_RAD: f64 = std::f64::consts::FRAC_PI_4;
+/// Yaw-rate gain of the on-spot turn, 1/s.
+const TURN_GAIN: f64 = 2.0;
+/// Waypoints searched either side of the old target when the path changes under the robot.
+const REACQUIRE_WINDOW: usize = 400;
+
+/// What the follower asks of the body.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Command {
+    /// Forward speed, m/s.
+    pub v: f64,
+    /// Yaw rate, rad/s.
+    pub w: f64,
+    /// The tool works (the stretch being driven is a `cover` one).
+    pub tool_on: bool,
+}
+
+impl Command {
+    const STOP: Self = Self {
+        v: 0.0,
+        w: 0.0,
+        tool_on: false,
+    };
+}
+
+/// Where the robot is along its plan.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Follower {
+    mu: f64,
+    target: usize,
+    finished: bool,
+}
+
+impl Follower {
+    /// A follower with threshold `mu` (metres, ≥ 0), heading for the first waypoint.
+    pub fn new(mu: f64) -> Self {
+        Self {
+            mu: mu.max(0.0),
+            target: 0,
+            finished: false,
+        }
+    }
+
+    /// The waypoint it heads for.
+    pub fn target(&self) -> usize {
+        self.target
+    }
+
+    /// True once the last waypoint is reached.
+    pub fn is_finished(&self) -> bool {
+        self.finished
+    }
+
+    fn reached(&self, d: f64, body: &DiffDrive, last: bool) -> bool {
+        if self.mu == 0.0 || last {
+            d < ARRIVE_M.max(if last { self.mu.min(0.1) } else { 0.0 }) && (body.v < STOPPED_MPS || self.mu > 0.0)
+        } else {
+            d < self.mu
+        }
+    }
+
+    /// The command for this instant.
+    pub fn command(&mut self, wps: &[WaypointDoc], body: &DiffDrive, lim: &Limits) -> Command {
+        if self.finished || wps.is_empty() {
+            return Command::STOP;
+        }
+        let dist = |i: usize| ((wps[i].x - body.x).powi(2) + (wps[i].y - body.y).powi(2)).sqrt();
+        loop {
+            let last = self.target + 1 >= wps.len();
+            if !self.reached(dist(self.target), body, last) {
+                break;
+            }
+            if last {
+                self.finished = true;
+                return Command::STOP;
+            }
+            self.target += 1;
+        }
+        let wp = &wps[self.target];
+        let tool_on = wp.kind == WaypointKindDoc::Cover && self.target > 0;
+        let (dx, dy) = (wp.x - body.x, wp.y - body.y);
+        let l = (dx * dx + dy * dy).sqrt();
+        let (c, s) = (body.yaw.cos(), body.yaw.sin());
+        let (lx, ly) = (c * dx + s * dy, -s * dx + c * dy);
+        let alpha = wrap(ly.atan2(lx));
+        if alpha.abs() > TURN_ON_SPOT_RAD {
+            return Command {
+                v: 0.0,
+                w: (TURN_GAIN * alpha).clamp(-lim.w_max, lim.w_max),
+                tool_on,
+            };
+        }
+        // Pure pursuit: the arc through the target tangent to the heading.
+        let kappa = if l > 1e-9 { 2.0 * ly / (l * l) } else { 0.0 };
+        let mut v = wp.v.clamp(0.05, lim.v_max);
+        if self.mu == 0.0 || self.target + 1 == wps.len() {
+            // Brake to stand on the target.
+            v = v.min((2.0 * lim.a_max * l).sqrt());
+        }
+        if kappa.abs() > 1e-9 {
+            v = v.min(lim.w_max / kappa.abs());
+        }
+        v *= alpha.cos();
+        Command {
+            v,
+            w: v * kappa,
+            tool_on,
+        }
+    }
+
+    /// The on-the-spot yaw rate that turns the body toward its target.
+    pub fn turn_rate(&self, wps: &[WaypointDoc], body: &DiffDrive, lim: &Limits) -> f64 {
+        let Some(wp) = wps.get(self.target) else { return 0.0 };
+        let alpha = wrap((wp.y - body.y).atan2(wp.x - body.x) - body.yaw);
+        (TURN_GAIN * alpha).clamp(-lim.w_max, lim.w_max)
+    }
+
+    /// The path changed under the robot (a correction, or the plan fetched after a gap): heads for the
+    /// waypoint of the new path nearest the robot within a window round the old target (shifted by the change
+    /// in length), the later one on a tie.
+    pub fn reacquire(&mut self, old_len: usize, wps: &[WaypointDoc], body: &DiffDrive) {
+        if wps.is_empty() {
+            self.target = 0;
+            return;
+        }
+        let grown = wps.len() as i64 - old_len as i64;
+        let lo = self.target.saturating_sub(REACQUIRE_WINDOW);
+        let hi = ((self.target as i64 + REACQUIRE_WINDOW as i64 + grown.max(0)).max(0) as usize).min(wps.len() - 1);
+        let lo = lo.min(hi);
+        let d2 = |i: usize| (wps[i].x - body.x).powi(2) + (wps[i].y - body.y).powi(2);
+        let mut best = lo;
+        for i in lo..=hi {
+            if d2(i) <= d2(best) {
+                best = i;
+            }
+        }
+        self.target = best;
+        self.finished = false;
+    }
+
+    /// A new plan: start again from its first waypoint.
+    pub fn restart(&mut self) {
+        self.target = 0;
+        self.finished = false;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const LIM: Limits = Limits {
+        v_max: 1.0,
+        a_max: 0.5,
+        w_max: 1.5,
+        alpha_max: 3.0,
+    };
+
+    fn wp(x: f64, y: f64) -> WaypointDoc {
+        WaypointDoc {
+            x,
+            y,
+            z: 0.0,
+            v: 0.8,
+            t: 0.0,
+            kind: WaypointKindDoc::Cover,
+            region: Some(0),
+        }
+    }
+
+    /// An L: 4 m along x, then 3 m up, waypoints every 0.25 m.
+    fn ell() -> Vec<WaypointDoc> {
+        let mut w: Vec<_> = (0..=16).map(|i| wp(f64::from(i) * 0.25, 0.0)).collect();
+        w.extend((1..=12).map(|i| wp(4.0, f64::from(i) * 0.25)));
+        w
+    }
+
+    /// Drives until finished; returns (time, largest distance from the path's polyline, stops on the way).
+    fn drive(mu: f64) -> (f64, f64, usize) {
+        let wps = ell();
+        let mut f = Follower::new(mu);
+        let mut body = DiffDrive::at(0.0, 0.0, 0.0);
+        let (mut t, mut worst, mut stops, mut moving) = (0.0, 0.0f64, 0, false);
+        while !f.is_finished() && t < 200.0 {
+            let c = f.command(&wps, &body, &LIM);
+            body.step(c.v, c.w, &LIM, 0.05);
+            t += 0.05;
+            let off = if body.x <= 4.0 {
+                body.y.abs().min((body.x - 4.0).abs())
+            } else {
+                body.x - 4.0
+            };
+            worst = worst.max(off);
+            if moving && body.v < STOPPED_MPS {
+                stops += 1;
+                moving = false;
+            }
+            moving |= body.v > 0.05;
+        }
+        assert!(f.is_finished(), "mu {mu}: not finished after {t} s");
+        (t, worst, stops)
+    }
+
+    #[test]
+    fn dynamic_tracking_removes_stop_and_go() {
+        let (t0, off0, stops0) = drive(0.0);
+        let (t2, off2, stops2) = drive(0.2);
+        // Goal by goal stops at each of the 28 targets; mu = 0.2 m drives through.
+        assert!(stops0 >= 25, "{stops0}");
+        assert!(stops2 <= 2, "{stops2}");
+        assert!(t2 < t0 / 2.0, "{t2} vs {t0}");
+        // Goal by goal stays on the path; mu cuts the L's sharp corner by about its look-ahead.
+        assert!(off0 < 0.07 && off2 < 0.35, "{off0} {off2}");
+    }
+
+    #[test]
+    fn a_correction_is_picked_up_where_the_robot_is() {
+        let wps = ell();
+        let mut f = Follower::new(0.2);
+        let mut body = DiffDrive::at(0.0, 0.0, 0.0);
+        while body.x < 1.0 {
+            let c = f.command(&wps, &body, &LIM);
+            body.step(c.v, c.w, &LIM, 0.05);
+        }
+        let before = f.target();
+        // Ten detour waypoints inserted from index 8 (x = 2.0): the target stays ahead of the robot.
+        let mut patched = wps[..8].to_vec();
+        patched.extend((0..10).map(|i| wp(2.0 + f64::from(i) * 0.1, 0.5)));
+        patched.extend_from_slice(&wps[8..]);
+        f.reacquire(wps.len(), &patched, &body);
+        assert!(
+            f.target() <= before + 1 && f.target() + 1 >= before,
+            "{} vs {before}",
+            f.target()
+        );
+        let p = &patched[f.target()];
+        assert!(p.x >= body.x - 0.3, "{} behind {}", p.x, body.x);
+    }
+}

@@ -1,0 +1,151 @@
+//! One simulation run against a daemon: load the world, join the fleet, optionally plan and assign, drive
+//! paced by the clock, measure, report.
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use shift_client::Client;
+use shift_client::robot::Applied;
+use shift_proto::keys::{KeySpace, Ros2Mapping};
+use tokio::sync::mpsc;
+
+use crate::clock::SimClock;
+use crate::error::SimError;
+use crate::measure::measure;
+use crate::net::RobotNet;
+use crate::plans::plan_and_assign;
+use crate::report::{Report, TraceWriter};
+use crate::robot::SimRobot;
+use crate::sim::{Outgoing, SimConfig, Simulation};
+use crate::world::World;
+
+/// Everything a run needs.
+#[derive(Debug, Clone)]
+pub struct RunOptions {
+    /// The daemon's HTTP base URL.
+    pub http: String,
+    /// Bearer token for the API, if it needs one.
+    pub token: Option<String>,
+    /// The daemon's Zenoh endpoint.
+    pub zenoh: String,
+    /// Key prefix and fleet.
+    pub keys: KeySpace,
+    /// How the robots name their sensor keys.
+    pub mapping: Ros2Mapping,
+    /// The site the robots drive on.
+    pub site: String,
+    /// The world file.
+    pub world: PathBuf,
+    /// How many robots (default: those of the world file).
+    pub robots: Option<usize>,
+    /// Ask the daemon for one plan per robot and assign it.
+    pub plan_per_robot: bool,
+    /// Simulated seconds per real second (≤ 0: as fast as possible).
+    pub speedup: f64,
+    /// Seed for placing extra robots.
+    pub seed: u64,
+    /// Give up after this many simulated seconds.
+    pub timeout_s: f64,
+    /// Per-robot ground-truth traces go here.
+    pub trace: Option<PathBuf>,
+    /// Steps, rates, laser, mu.
+    pub sim: SimConfig,
+}
+
+/// How long planning may take per run.
+const PLAN_TIMEOUT: Duration = Duration::from_secs(300);
+/// Wall-clock seconds between progress lines.
+const PROGRESS_EVERY_S: f64 = 10.0;
+
+/// Runs the simulation; the report says what happened (every robot finished or not).
+pub async fn run(opts: &RunOptions) -> Result<Report, SimError> {
+    let world = World::load(&opts.world)?;
+    let n = opts.robots.unwrap_or(world.robots.len());
+    if n == 0 {
+        return Err(crate::error::bad(
+            "--robots",
+            "no robots: the world file lists none and --robots is 0",
+        ));
+    }
+    let static_grid = world.static_grid();
+    let specs = crate::spread::robots(&world.robots, n, &static_grid, opts.seed)?;
+    let geometry = world.grid.geometry;
+    let robots: Vec<SimRobot> = specs
+        .into_iter()
+        .map(|s| SimRobot::new(s, geometry, opts.sim.mu))
+        .collect();
+    let mut sim = Simulation::new(world, robots, opts.sim);
+
+    let (inbox, mut messages) = mpsc::unbounded_channel();
+    let mut nets = Vec::with_capacity(sim.robots.len());
+    for (i, r) in sim.robots.iter().enumerate() {
+        nets.push(RobotNet::connect(&opts.zenoh, &opts.keys, &opts.mapping, &r.spec.id, i, inbox.clone()).await?);
+    }
+    tracing::info!(robots = nets.len(), "robots joined the fleet");
+    // Let the daemon see the robots alive and at their starts before anything is assigned.
+    for (net, r) in nets.iter().zip(&sim.robots) {
+        net.odometry(&r.body, SimClock::start(0.0).stamp_ns(0.0)).await?;
+    }
+    if opts.plan_per_robot {
+        let mut client = Client::new(&opts.http).map_err(|e| SimError::Fleet(e.to_string()))?;
+        if let Some(t) = &opts.token {
+            client = client.with_token(t.clone());
+        }
+        plan_and_assign(&client, &opts.site, &sim.robots, PLAN_TIMEOUT).await?;
+    }
+
+    let ids: Vec<String> = sim.robots.iter().map(|r| r.spec.id.clone()).collect();
+    let mut trace = opts
+        .trace
+        .as_deref()
+        .map(|d| TraceWriter::create(d, &ids))
+        .transpose()?;
+    let clock = SimClock::start(opts.speedup);
+    let mut next_progress = PROGRESS_EVERY_S;
+    while sim.t < opts.timeout_s && !sim.all_finished() {
+        while let Ok((i, message)) = messages.try_recv() {
+            if let Applied::Gap { .. } = sim.robots[i].on_message(message) {
+                nets[i].request_plan();
+            }
+        }
+        for out in sim.step() {
+            match out {
+                Outgoing::Odom { robot, body } => nets[robot].odometry(&body, clock.stamp_ns(sim.t)).await?,
+                Outgoing::Scan { robot, ranges } => {
+                    nets[robot]
+                        .scan(&sim.config.lidar, &ranges, clock.stamp_ns(sim.t))
+                        .await?
+                }
+            }
+        }
+        if let Some(w) = &mut trace {
+            w.row(sim.t, &sim.robots)?;
+        }
+        if clock.wall_s() >= next_progress {
+            next_progress += PROGRESS_EVERY_S;
+            let done = sim.robots.iter().filter(|r| r.finished()).count();
+            let driven: f64 = sim.robots.iter().map(|r| r.stats.driven_m).sum();
+            tracing::info!(
+                t = format!("{:.0}", sim.t),
+                done,
+                driven_m = format!("{driven:.0}"),
+                "progress"
+            );
+        }
+        if let Some(due) = clock.due(sim.t) {
+            tokio::time::sleep_until(due.into()).await;
+        } else if sim.t.rem_euclid(1.0) < sim.config.dt {
+            // Unpaced: let the network tasks run now and then.
+            tokio::task::yield_now().await;
+        }
+    }
+    if let Some(w) = trace {
+        w.finish()?;
+    }
+    let coverage = measure(&static_grid, &sim.robots);
+    let report = Report::new(&sim.robots, &coverage, sim.t, clock.wall_s());
+    for net in nets {
+        net.close().await;
+    }
+    Ok(report)
+}
