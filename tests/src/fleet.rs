@@ -20,6 +20,17 @@ pub fn free_port() -> Result<u16> {
     Ok(std::net::TcpListener::bind("127.0.0.1:0")?.local_addr()?.port())
 }
 
+/// A test config whose Zenoh listens on a free loopback port, with no default site (robots feed the site of
+/// their assignment only) and no demo site; returns it with the endpoint robots connect to.
+pub fn fleet_config(data_dir: &std::path::Path) -> Result<(shiftd::Config, String)> {
+    let endpoint = format!("tcp/127.0.0.1:{}", free_port()?);
+    let mut config = crate::test_config(data_dir);
+    config.zenoh.listen = vec![endpoint.clone()];
+    config.zenoh.site = String::new();
+    config.demo.enabled = false;
+    Ok((config, endpoint))
+}
+
 /// A peer session connected to `endpoint` only (no listening, no scouting), like a robot on loopback.
 pub async fn robot_session(endpoint: &str) -> Result<zenoh::Session> {
     let mut c = zenoh::Config::default();

@@ -8,9 +8,9 @@ use std::time::Duration;
 use anyhow::{Context, Result, anyhow, bail};
 use serde_json::{Value, json};
 use shift_proto::{CorrectionReason, PlanDocument};
-use shift_tests::fleet::{ScriptedRobot, free_port, room_grid};
+use shift_tests::TestServer;
+use shift_tests::fleet::{ScriptedRobot, fleet_config, room_grid};
 use shift_tests::path::{along, check_correction, clearance, dist, length, longest_straight, seg_dist};
-use shift_tests::{TestServer, test_config};
 
 const LONG: Duration = Duration::from_secs(120);
 const RADIUS: f64 = 0.15;
@@ -19,12 +19,8 @@ const RADIUS: f64 = 0.15;
 /// assigns the plan to robot r1 (which joined first). Returns the server, the robot and the plan.
 async fn planned(site: &str, map: Value, start: [f64; 2]) -> Result<Planned> {
     let dir = tempfile::tempdir()?;
-    let endpoint = format!("tcp/127.0.0.1:{}", free_port()?);
-    let mut config = test_config(dir.path());
-    config.zenoh.listen = vec![endpoint.clone()];
     // No default site: the robot's data reaches the site only by its assignment.
-    config.zenoh.site = String::new();
-    config.demo.enabled = false;
+    let (config, endpoint) = fleet_config(dir.path())?;
     let server = TestServer::start(config).await?;
     let (code, body) = server.post(&format!("/v1/sites/{site}/map"), &map).await?;
     if code != 201 {

@@ -11,20 +11,16 @@ use shift_client::Client;
 use shift_client::proto::keys::KeySpace;
 use shift_client::proto::{CorrectionDoc, OccupancyGridDoc, PlanRequest, PlanStatus, RobotSpec};
 use shift_client::robot::{Applied, FollowedPlan, RobotLink, RobotMessage};
-use shift_tests::fleet::{ScriptedRobot, free_port, room_grid};
+use shift_tests::TestServer;
+use shift_tests::fleet::{ScriptedRobot, fleet_config, room_grid};
 use shift_tests::path::{along, longest_straight};
-use shift_tests::{TestServer, test_config};
 
 const LONG: Duration = Duration::from_secs(120);
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_robot_follows_its_plan_and_a_correction_and_tail_prints_it() -> Result<()> {
     let dir = tempfile::tempdir()?;
-    let endpoint = format!("tcp/127.0.0.1:{}", free_port()?);
-    let mut config = test_config(dir.path());
-    config.zenoh.listen = vec![endpoint.clone()];
-    config.zenoh.site = String::new();
-    config.demo.enabled = false;
+    let (config, endpoint) = fleet_config(dir.path())?;
     let server = TestServer::start(config).await?;
     let client = Client::new(&server.base)?;
 

@@ -25,6 +25,14 @@ impl SimClock {
         }
     }
 
+    /// The same epoch (stamps unchanged), paced from now on: simulated time 0 is due now.
+    pub fn pace_from_now(self) -> Self {
+        Self {
+            start: Instant::now(),
+            ..self
+        }
+    }
+
     /// The stamp of simulated time `t` (seconds since the start), nanoseconds since the UNIX epoch.
     pub fn stamp_ns(&self, t: f64) -> i64 {
         self.epoch_ns.saturating_add((t * 1e9) as i64)

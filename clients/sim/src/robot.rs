@@ -184,27 +184,16 @@ impl SimRobot {
     fn path_blocked(&self, v: f64, kappa: f64, resolution: f64) -> bool {
         let r = self.spec.radius - resolution / 2.0 - GRAZE_M;
         let reach = v * v / (2.0 * self.limits.a_max) + STOP_MARGIN_M;
-        let near: Vec<&Point2> = self
-            .seen
-            .iter()
-            .filter(|p| (p.x - self.body.x).hypot(p.y - self.body.y) < reach + r)
-            .collect();
-        if near.is_empty() {
-            return false;
-        }
         let samples = (reach / ARC_STEP_M).ceil().max(1.0) as usize;
         // A point already inside the field blocks only motion that brings the body closer to it.
-        let here: Vec<f64> = near
-            .iter()
-            .map(|p| (p.x - self.body.x).hypot(p.y - self.body.y))
-            .collect();
-        (1..=samples).any(|k| {
-            let s = reach * k as f64 / samples as f64;
-            let (x, y) = arc_point(&self.body, kappa, s);
-            near.iter().zip(&here).any(|(p, &d0)| {
-                let d = (p.x - x).hypot(p.y - y);
-                d < r && d < d0
-            })
+        self.seen.iter().any(|p| {
+            let d0 = (p.x - self.body.x).hypot(p.y - self.body.y);
+            d0 < reach + r
+                && (1..=samples).any(|k| {
+                    let (x, y) = arc_point(&self.body, kappa, reach * k as f64 / samples as f64);
+                    let d = (p.x - x).hypot(p.y - y);
+                    d < r && d < d0
+                })
         })
     }
 

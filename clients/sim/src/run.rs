@@ -82,9 +82,11 @@ pub async fn run(opts: &RunOptions) -> Result<Report, SimError> {
         nets.push(RobotNet::connect(&opts.zenoh, &opts.keys, &opts.mapping, &r.spec.id, i, inbox.clone()).await?);
     }
     tracing::info!(robots = nets.len(), "robots joined the fleet");
-    // Let the daemon see the robots alive and at their starts before anything is assigned.
+    // One epoch for every stamp. The daemon sees the robots alive and at their starts before anything is
+    // assigned.
+    let clock = SimClock::start(opts.speedup);
     for (net, r) in nets.iter().zip(&sim.robots) {
-        net.odometry(&r.body, SimClock::start(0.0).stamp_ns(0.0)).await?;
+        net.odometry(&r.body, clock.stamp_ns(0.0)).await?;
     }
     if opts.plan_per_robot {
         let mut client = Client::new(&opts.http).map_err(|e| SimError::Fleet(e.to_string()))?;
@@ -100,7 +102,7 @@ pub async fn run(opts: &RunOptions) -> Result<Report, SimError> {
         .as_deref()
         .map(|d| TraceWriter::create(d, &ids))
         .transpose()?;
-    let clock = SimClock::start(opts.speedup);
+    let clock = clock.pace_from_now();
     let mut next_progress = PROGRESS_EVERY_S;
     while sim.t < opts.timeout_s && !sim.all_finished() {
         while let Ok((i, message)) = messages.try_recv() {

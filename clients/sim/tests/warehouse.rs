@@ -11,8 +11,8 @@ use std::time::Duration;
 use anyhow::{Context, Result, ensure};
 use shift_client::Client;
 use shift_sim::Report;
-use shift_tests::fleet::free_port;
-use shift_tests::{TestServer, test_config};
+use shift_tests::TestServer;
+use shift_tests::fleet::fleet_config;
 
 fn warehouse() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenarios/warehouse")
@@ -25,12 +25,7 @@ const BOX: [f64; 4] = [7.0, 12.3, 7.8, 13.1];
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn two_robots_cover_the_warehouse_round_a_hidden_box_and_a_walker() -> Result<()> {
     let dir = tempfile::tempdir()?;
-    let zport = free_port()?;
-    let endpoint = format!("tcp/127.0.0.1:{zport}");
-    let mut config = test_config(dir.path());
-    config.zenoh.listen = vec![endpoint.clone()];
-    config.zenoh.site = String::new();
-    config.demo.enabled = false;
+    let (config, endpoint) = fleet_config(dir.path())?;
     let server = TestServer::start(config).await?;
     let client = Client::new(&server.base)?;
 
