@@ -196,13 +196,14 @@ async fn run_and_write(opts: &RunOptions, path: &std::path::Path) -> anyhow::Res
     std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))?;
     for r in &report.robots {
         eprintln!(
-            "{}: {} · {:.1} m in {:.1} s · covered {:.1} % · stops {} · collisions {} · corrections {} · version {:?}",
+            "{}: {} · {:.1} m in {:.1} s · covered {:.1} % · stops {} · skipped {} · collisions {} · corrections {} · version {:?}",
             r.id,
             if r.finished { "finished" } else { "NOT finished" },
             r.driven_m,
             r.time_s,
             r.covered_pct,
             r.stops,
+            r.skipped_waypoints,
             r.collisions,
             r.corrections_applied,
             r.final_version

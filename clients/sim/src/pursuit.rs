@@ -152,6 +152,26 @@ impl Follower {
         self.finished = false;
     }
 
+    /// Gives up the target (a robot blocked too long, as a waypoint follower that does not stop on a failed
+    /// goal): heads for the first later waypoint more than `clear_m` from it, or finishes when none is; returns
+    /// the waypoints given up.
+    pub fn skip(&mut self, wps: &[WaypointDoc], clear_m: f64) -> usize {
+        let Some(at) = wps.get(self.target) else {
+            self.finished = true;
+            return 0;
+        };
+        let from = self.target;
+        let far = |w: &WaypointDoc| (w.x - at.x).hypot(w.y - at.y) > clear_m;
+        match wps.iter().enumerate().skip(from + 1).find(|(_, w)| far(w)) {
+            Some((i, _)) => self.target = i,
+            None => {
+                self.target = wps.len() - 1;
+                self.finished = true;
+            }
+        }
+        self.target - from
+    }
+
     /// A new plan: start again from its first waypoint.
     pub fn restart(&mut self) {
         self.target = 0;
@@ -225,6 +245,19 @@ mod tests {
         assert!(t2 < t0 / 2.0, "{t2} vs {t0}");
         // Goal by goal stays on the path; mu cuts the L's sharp corner by about its look-ahead.
         assert!(off0 < 0.07 && off2 < 0.35, "{off0} {off2}");
+    }
+
+    #[test]
+    fn giving_up_a_target_heads_for_the_first_waypoint_clear_of_it() {
+        let wps = ell();
+        let mut f = Follower::new(0.2);
+        f.target = 14; // (3.5, 0)
+        // (3.75, 0), (4, 0) and (4, 0.25) lie within 0.6 m of it.
+        assert_eq!(f.skip(&wps, 0.6), 4);
+        assert_eq!((wps[f.target()].x, wps[f.target()].y), (4.0, 0.5));
+        f.target = wps.len() - 2;
+        f.skip(&wps, 0.6);
+        assert!(f.is_finished());
     }
 
     #[test]

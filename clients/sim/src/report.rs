@@ -39,6 +39,9 @@ pub struct RobotReport {
     pub grazes: u64,
     /// Plan fetches on a version gap.
     pub gaps: u64,
+    /// Waypoints given up after standing blocked too long.
+    #[serde(default)]
+    pub skipped_waypoints: u64,
 }
 
 /// The fleet's outcome.
@@ -83,6 +86,7 @@ impl Report {
                 mover_contacts: r.stats.mover_contacts,
                 grazes: r.stats.grazes,
                 gaps: r.stats.gaps,
+                skipped_waypoints: r.stats.skipped_waypoints,
             })
             .collect();
         let fleet = FleetReport {

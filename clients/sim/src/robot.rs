@@ -7,7 +7,7 @@ use shift_planner::map::GridGeometry;
 use shift_planner::metrics::coverage::CoverageRaster;
 
 use crate::drive::{DiffDrive, Limits};
-use crate::pursuit::Follower;
+use crate::pursuit::{Command, Follower};
 use crate::world::World;
 use crate::world::file::RobotSpecFile;
 
@@ -18,23 +18,48 @@ const DEFAULT_W_MAX: f64 = 1.5;
 const ALPHA_MAX: f64 = 3.0;
 /// Tolerance of the safety field beyond half a map cell, metres (see [`SimRobot::path_blocked`]).
 const GRAZE_M: f64 = 0.01;
-/// Extra room kept ahead beyond the braking distance, metres.
+/// Extra room kept ahead beyond where the body would come to rest, metres.
 const STOP_MARGIN_M: f64 = 0.05;
 /// How far the body may reach into the world before it counts as a collision, metres: plans pass walls at
 /// exactly the radius from non-free cell centres (DESIGN §6), and the simulated controller tracks its path to
 /// within a centimetre or two, so touching at that depth is a graze (counted apart), not a collision.
 pub const TRACKING_TOLERANCE_M: f64 = 0.02;
-/// Spacing of the samples along the arc the safety check sweeps, metres.
-const ARC_STEP_M: f64 = 0.05;
+/// How far ahead a detour's headway toward the target is judged, seconds.
+const DETOUR_LOOKAHEAD_S: f64 = 1.0;
+/// The slowest detour speed, m/s.
+const DETOUR_CRAWL_MPS: f64 = 0.1;
+/// Yaw rates tried either side of straight on by a detour (the range split in this many steps each way).
+const DETOUR_RATES: u32 = 7;
+/// The headway a detour must make over its roll-out, metres.
+const DETOUR_HEADWAY_M: f64 = 0.02;
+/// How long a robot stopped by its safety check waits before it gives up its target, simulated seconds (a
+/// waypoint follower that does not stop on a failed goal, as Nav2's with `stop_on_failure: false`).
+pub const GIVE_UP_S: f64 = 10.0;
+/// A target given up takes the waypoints this close to it along, metres.
+const GIVE_UP_CLEAR_M: f64 = 1.0;
+/// Bound on the steps of a predicted stop (a body at 10 m/s braking at 0.5 m/s² in 0.05 s steps needs 400).
+const MAX_BRAKING_STEPS: usize = 2000;
 
-/// The point `s` metres along the arc of curvature `kappa` from `body`'s pose.
-fn arc_point(body: &DiffDrive, kappa: f64, s: f64) -> (f64, f64) {
-    let (c, sn) = (body.yaw.cos(), body.yaw.sin());
-    if kappa.abs() < 1e-9 {
-        return (body.x + s * c, body.y + s * sn);
+/// Where the body's centre would pass if it took `cmd` for one step of `dt` and then braked to rest holding the
+/// same yaw-rate command, with the body's own acceleration limits (its yaw rate lags the command, so the arc it
+/// really drives is not the commanded one); then [`STOP_MARGIN_M`] on along its final heading.
+fn braking_path(body: &DiffDrive, cmd: Command, limits: &Limits, dt: f64) -> Vec<Point2> {
+    let mut b = *body;
+    let mut path = Vec::new();
+    b.step(cmd.v, cmd.w, limits, dt);
+    path.push(Point2::new(b.x, b.y));
+    let mut n = 0;
+    while b.v > 0.0 && n < MAX_BRAKING_STEPS {
+        b.step(0.0, cmd.w, limits, dt);
+        path.push(Point2::new(b.x, b.y));
+        n += 1;
     }
-    let (dx, dy) = ((kappa * s).sin() / kappa, (1.0 - (kappa * s).cos()) / kappa);
-    (body.x + c * dx - sn * dy, body.y + sn * dx + c * dy)
+    let (c, s) = (b.yaw.cos(), b.yaw.sin());
+    for k in 1..=2 {
+        let d = STOP_MARGIN_M * f64::from(k) / 2.0;
+        path.push(Point2::new(b.x + d * c, b.y + d * s));
+    }
+    path
 }
 
 /// What a robot counted.
@@ -57,6 +82,8 @@ pub struct RobotStats {
     pub corrections_rejected: u64,
     /// Plan fetches asked for because a correction showed a version gap.
     pub gaps: u64,
+    /// Waypoints given up after waiting [`GIVE_UP_S`] for a way to them.
+    pub skipped_waypoints: u64,
     /// Simulated time at which it reached the end of its plan.
     pub finished_at_s: Option<f64>,
 }
@@ -80,6 +107,10 @@ pub struct SimRobot {
     /// Its last scan's returns in the map frame.
     seen: Vec<Point2>,
     blocked: bool,
+    /// The yaw-rate command its last clear check assumed while braking.
+    brake_w: f64,
+    /// Since when it has stood blocked, simulated seconds.
+    waiting_since: Option<f64>,
     touching: bool,
     hitting: bool,
     touching_mover: bool,
@@ -105,6 +136,8 @@ impl SimRobot {
             stats: RobotStats::default(),
             seen: Vec::new(),
             blocked: false,
+            brake_w: 0.0,
+            waiting_since: None,
             touching: false,
             hitting: false,
             touching_mover: false,
@@ -177,24 +210,84 @@ impl SimRobot {
             .collect();
     }
 
-    /// True when something seen lies in the stretch the body would sweep before it could stop from `v` on the
-    /// arc of curvature `kappa` it is commanded along (plus a margin). The swept radius is the body's less half
-    /// a map cell: plans keep the radius from non-free cell *centres* (DESIGN §6), so a robot on its plan sees
-    /// a wall's face up to half a cell closer than that, and must not stop for it.
-    fn path_blocked(&self, v: f64, kappa: f64, resolution: f64) -> bool {
+    /// True when something seen lies where the body would pass along `path` (see [`braking_path`]). The field's
+    /// radius is the body's less half a map cell: plans keep the radius from non-free cell *centres* (DESIGN §6),
+    /// so a robot on its plan sees a wall's face up to half a cell closer than that, and must not stop for it.
+    fn path_blocked(&self, path: &[Point2], resolution: f64) -> bool {
         let r = self.spec.radius - resolution / 2.0 - GRAZE_M;
-        let reach = v * v / (2.0 * self.limits.a_max) + STOP_MARGIN_M;
-        let samples = (reach / ARC_STEP_M).ceil().max(1.0) as usize;
+        let here = self.position();
+        let mut reach = 0.0;
+        let mut last = here;
+        for p in path {
+            reach += (*p - last).norm();
+            last = *p;
+        }
         // A point already inside the field blocks only motion that brings the body closer to it.
         self.seen.iter().any(|p| {
-            let d0 = (p.x - self.body.x).hypot(p.y - self.body.y);
+            let d0 = (*p - here).norm();
             d0 < reach + r
-                && (1..=samples).any(|k| {
-                    let (x, y) = arc_point(&self.body, kappa, reach * k as f64 / samples as f64);
-                    let d = (p.x - x).hypot(p.y - y);
+                && path.iter().any(|q| {
+                    let d = (*p - *q).norm();
                     d < r && d < d0
                 })
         })
+    }
+
+    /// The safety stop with a local detour, as a robot's own local planner does it. `cmd` goes as it is when the
+    /// path the body would really drive (see [`braking_path`]) is clear of what it saw. Otherwise the clear arc
+    /// that brings it closest to `target` (see [`SimRobot::detour`]) goes instead; failing that it stops: it
+    /// brakes on exactly the path last found clear (the yaw-rate command that path was checked with) and, at
+    /// rest, turns on the spot at `turn` (always safe for a disc) to face its target while it waits. Every
+    /// command it lets through was checked from the body's state at that step, so the body never enters the
+    /// field round what it saw.
+    fn guard(&mut self, cmd: Command, target: Option<Point2>, turn: f64, dt: f64, resolution: f64) -> Command {
+        let clear = |c: Command| !self.path_blocked(&braking_path(&self.body, c, &self.limits, dt), resolution);
+        let chosen = if self.body.v <= 0.0 && cmd.v <= 0.0 || clear(cmd) {
+            Some(cmd)
+        } else {
+            target.and_then(|t| self.detour(cmd, t, dt, resolution))
+        };
+        if let Some(c) = chosen {
+            self.brake_w = c.w;
+            self.blocked = false;
+            return c;
+        }
+        if !self.blocked {
+            self.stats.stops += 1;
+        }
+        self.blocked = true;
+        Command {
+            v: 0.0,
+            w: if self.body.v > 0.0 { self.brake_w } else { turn },
+            tool_on: cmd.tool_on,
+        }
+    }
+
+    /// Among arcs at the commanded speed, half of it and a crawl, and yaw rates across the body's range, the
+    /// clear one whose [`DETOUR_LOOKAHEAD_S`] roll-out ends closest to `target`, if that is closer than the body
+    /// is now (a detour must make headway, or the robot waits).
+    fn detour(&self, cmd: Command, target: Point2, dt: f64, resolution: f64) -> Option<Command> {
+        let v_nominal = cmd.v.max(self.body.v).clamp(DETOUR_CRAWL_MPS, self.limits.v_max);
+        let now = (target - self.position()).norm();
+        let mut best: Option<(f64, Command)> = None;
+        for v in [v_nominal, v_nominal / 2.0, DETOUR_CRAWL_MPS] {
+            for k in 0..=2 * DETOUR_RATES {
+                let w = self.limits.w_max * (f64::from(k) / f64::from(DETOUR_RATES) - 1.0);
+                let c = Command { v, w, ..cmd };
+                let mut b = self.body;
+                for _ in 0..(DETOUR_LOOKAHEAD_S / dt).ceil() as usize {
+                    b.step(c.v, c.w, &self.limits, dt);
+                }
+                let end = (target - Point2::new(b.x, b.y)).norm();
+                if end < now - DETOUR_HEADWAY_M
+                    && best.is_none_or(|(e, _)| end < e)
+                    && !self.path_blocked(&braking_path(&self.body, c, &self.limits, dt), resolution)
+                {
+                    best = Some((end, c));
+                }
+            }
+        }
+        best.map(|(_, c)| c)
     }
 
     /// Advances `dt` seconds at simulated time `t` (the end of the step).
@@ -203,23 +296,22 @@ impl SimRobot {
             self.body.step(0.0, 0.0, &self.limits, dt);
             return;
         };
-        let mut cmd = self.follower.command(&doc.waypoints, &self.body, &self.limits);
+        let cmd = self.follower.command(&doc.waypoints, &self.body, &self.limits);
         if self.follower.is_finished() && self.stats.finished_at_s.is_none() {
             self.stats.finished_at_s = Some(t);
         }
-        // The speed it would have after this step, and the arc it is steered along.
-        let v_next = cmd.v.min(self.body.v + self.limits.a_max * dt).max(self.body.v);
-        let kappa = if cmd.v > 1e-9 { cmd.w / cmd.v } else { 0.0 };
-        let blocked = v_next > 0.0 && self.path_blocked(v_next, kappa, world.grid.geometry.resolution);
-        if blocked {
-            // Turning on the spot is always safe for a disc: face the target while waiting.
-            cmd.w = self.follower.turn_rate(&doc.waypoints, &self.body, &self.limits);
-            cmd.v = 0.0;
-            if !self.blocked {
-                self.stats.stops += 1;
-            }
+        let turn = self.follower.turn_rate(&doc.waypoints, &self.body, &self.limits);
+        let target = doc.waypoints.get(self.follower.target()).map(|w| Point2::new(w.x, w.y));
+        let cmd = self.guard(cmd, target, turn, dt, world.grid.geometry.resolution);
+        self.waiting_since = (self.blocked && self.body.v <= 0.0).then(|| self.waiting_since.unwrap_or(t));
+        if let Some(doc) = self.followed.doc()
+            && self.waiting_since.is_some_and(|since| t - since >= GIVE_UP_S)
+        {
+            let skipped = self.follower.skip(&doc.waypoints, GIVE_UP_CLEAR_M);
+            self.stats.skipped_waypoints += skipped as u64;
+            self.waiting_since = None;
+            tracing::info!(robot = %self.spec.id, skipped, x = self.body.x, y = self.body.y, "blocked too long: waypoints given up");
         }
-        self.blocked = blocked;
         let from = self.position();
         self.stats.driven_m += self.body.step(cmd.v, cmd.w, &self.limits, dt);
         let to = self.position();
@@ -241,5 +333,117 @@ impl SimRobot {
             self.stats.mover_contacts += 1;
         }
         self.touching_mover = touching_mover;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::drive;
+    use proptest::prelude::*;
+
+    fn robot(x: f64, y: f64, yaw: f64) -> SimRobot {
+        let spec = RobotSpecFile {
+            id: "r".into(),
+            start: [x, y, yaw],
+            radius: 0.3,
+            tool_width: 0.5,
+            v_max: None,
+            a_max: None,
+            w_max: None,
+            region: None,
+        };
+        let geometry = GridGeometry::new(100, 100, 0.1, Point2::new(-5.0, -5.0)).expect("geometry");
+        SimRobot::new(spec, geometry, 0.2)
+    }
+
+    /// Field radius for a 0.3 m body on a 0.1 m grid.
+    const FIELD: f64 = 0.3 - 0.05 - GRAZE_M;
+
+    proptest! {
+        /// Whatever it is commanded, a body never drives into the field round anything it has seen (the oracle:
+        /// the distance from its centre to every seen point, after every step), even when its yaw rate lags a
+        /// command that swings it toward a wall at the side.
+        #[test]
+        fn the_safety_stop_keeps_the_body_out_of_what_it_saw(
+            yaw in -3.2f64..3.2,
+            points in proptest::collection::vec((-2.0f64..2.0, -2.0f64..2.0), 1..40),
+            commands in proptest::collection::vec((0.0f64..1.2, -2.0f64..2.0, 1usize..30), 1..12),
+            tx in -3.0f64..3.0,
+            ty in -3.0f64..3.0,
+        ) {
+            let mut r = robot(0.0, 0.0, yaw);
+            r.seen = points.iter().map(|&(x, y)| Point2::new(x, y)).filter(|p| p.coords.norm() >= FIELD).collect();
+            let turn = 0.7;
+            let target = Some(Point2::new(tx, ty));
+            for (v, w, n) in commands {
+                for _ in 0..n {
+                    let cmd = r.guard(Command { v, w, tool_on: false }, target, turn, 0.05, 0.1);
+                    r.body.step(cmd.v, cmd.w, &r.limits, 0.05);
+                    for p in &r.seen {
+                        let d = (*p - r.position()).norm();
+                        prop_assert!(d >= FIELD - 2e-3, "{d} from {p:?} at {:?}", r.body);
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_lagging_turn_toward_a_wall_is_stopped_before_it() {
+        // Spinning left at full rate from rest, then commanded straight on: the body swings left while its yaw
+        // rate winds down. A wall 0.28 m to the left ahead clears the commanded straight line, not the swing.
+        let mut r = robot(0.0, 0.0, 0.0);
+        r.body.w = 1.5;
+        r.seen = (0..40)
+            .map(|i| Point2::new(f64::from(i) * 0.01, FIELD + 0.03))
+            .collect();
+        let mut closest = f64::INFINITY;
+        for _ in 0..40 {
+            let cmd = r.guard(
+                Command {
+                    v: 0.5,
+                    w: 0.0,
+                    tool_on: false,
+                },
+                None,
+                0.0,
+                0.05,
+                0.1,
+            );
+            r.body.step(cmd.v, cmd.w, &r.limits, 0.05);
+            for p in &r.seen {
+                closest = closest.min((*p - r.position()).norm());
+            }
+        }
+        assert!(closest >= FIELD - 1e-3, "{closest}");
+        assert!(r.stats.stops >= 1);
+    }
+
+    #[test]
+    fn a_robot_squeezed_against_a_wall_detours_along_it_instead_of_waiting() {
+        // A wall along y = 0; the robot 0.27 m from it; its target lies along the wall 0.25 m off it. Its
+        // controller pulls toward the wall (as pure pursuit does cutting an inside corner), into the field.
+        let mut r = robot(0.0, 0.27, 0.0);
+        r.seen = (-100..400).map(|i| Point2::new(f64::from(i) * 0.01, 0.0)).collect();
+        let target = Point2::new(3.0, 0.25);
+        let mut reached = false;
+        for _ in 0..400 {
+            let to = target - r.position();
+            if to.norm() < 0.2 {
+                reached = true;
+                break;
+            }
+            let err = drive::wrap(to.y.atan2(to.x) - r.body.yaw);
+            let nominal = Command {
+                v: 0.5,
+                w: (3.0 * err - 0.4).clamp(-1.5, 1.5),
+                tool_on: true,
+            };
+            let cmd = r.guard(nominal, Some(target), (3.0 * err).clamp(-1.5, 1.5), 0.05, 0.1);
+            r.body.step(cmd.v, cmd.w, &r.limits, 0.05);
+            assert!(r.body.y >= FIELD - 2e-3, "{:?}", r.body);
+        }
+        assert!(reached, "stuck at {:?}", r.body);
     }
 }

@@ -100,10 +100,19 @@ impl PoseHistory {
     }
 
     /// Adds a pose (out-of-order stamps are placed in order; an equal stamp replaces the pose held). Poses with
-    /// a non-finite coordinate are ignored.
-    pub fn push(&mut self, pose: Pose2) {
+    /// a non-finite coordinate are ignored. A stamp older than the newest by more than the span is no late
+    /// sample but the robot's clock jumping back (a restart, a clock reset, a replayed log): the history is
+    /// cleared and starts again from this pose, as ROS's tf buffer does; returns true then.
+    pub fn push(&mut self, pose: Pose2) -> bool {
         if !(pose.x.is_finite() && pose.y.is_finite() && pose.yaw.is_finite()) {
-            return;
+            return false;
+        }
+        let jumped_back = self
+            .poses
+            .back()
+            .is_some_and(|last| last.stamp_ns.saturating_sub(pose.stamp_ns) > self.params.span_ns);
+        if jumped_back {
+            self.poses.clear();
         }
         match self.poses.back() {
             Some(last) if pose.stamp_ns < last.stamp_ns => {
@@ -128,6 +137,7 @@ impl PoseHistory {
         {
             self.poses.pop_front();
         }
+        jumped_back
     }
 
     /// The pose at `stamp_ns`: interpolated between the two poses around it (x, y linearly, yaw along the shorter
@@ -242,6 +252,22 @@ mod tests {
             Err(PoseLookupError::TooOld { behind_ns: 100_000_000 })
         );
         assert_eq!(h.at(900_000_000).map_err(|e| e.kind()), Err("too_old"));
+    }
+
+    #[test]
+    fn a_clock_jumping_back_starts_the_history_again() {
+        let mut h = history();
+        for i in 0..50 {
+            assert!(!h.push(pose(f64::from(i), 0.0, 0.0, 1_000_000 + i64::from(i) * 100)));
+        }
+        // A late sample inside the span is placed in order; a stamp a whole span older is a restarted clock.
+        assert!(!h.push(pose(-1.0, 0.0, 0.0, 1_004_550)));
+        assert!(h.push(pose(7.0, 7.0, 0.0, 2_000)));
+        assert_eq!(h.len(), 1);
+        let p = h.at(2_000 * 1_000_000).expect("the new clock's pose");
+        assert_eq!((p.x, p.y), (7.0, 7.0));
+        assert!(!h.push(pose(7.5, 7.0, 0.0, 2_100)));
+        assert_eq!(h.len(), 2);
     }
 
     #[test]

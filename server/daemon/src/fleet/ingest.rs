@@ -266,6 +266,13 @@ impl Ingest {
                 tracing::warn!(robot, reason = d.reason.as_str(), "odometry not used: {}", d.detail);
             }
         }
+        if out.clock_jumped_back {
+            metrics::counter!("shift_odom_clock_jumps_total").increment(1);
+            tracing::info!(
+                robot,
+                "odometry clock jumped back (robot restarted?): pose history started again"
+            );
+        }
         if let (Some(pose), Some(engine)) = (out.pose, &self.engine) {
             let event = Event::RobotPose {
                 robot: robot.to_owned(),

@@ -179,6 +179,9 @@ pub struct OdomOutcome {
     pub rejected: Option<Dropped>,
     /// Messages that waited for it, now placed.
     pub released: Vec<Outcome>,
+    /// Its stamp lay a whole history span before the newest pose: the robot's clock jumped back (a restart, a
+    /// clock reset, a replayed log), so the history started again from this pose.
+    pub clock_jumped_back: bool,
 }
 
 /// A planar pose as received, in the frame it names.
@@ -359,13 +362,14 @@ impl SensorHub {
             };
         }
         let r = self.robot(robot);
-        r.history.push(p);
+        let clock_jumped_back = r.history.push(p);
         r.warned.remove(&DropReason::Frame);
         let released = self.release(robot, now_ms, false);
         OdomOutcome {
             pose: Some(p),
             rejected: None,
             released,
+            clock_jumped_back,
         }
     }
 
