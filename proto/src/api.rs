@@ -106,6 +106,11 @@ pub struct PlanRequest {
     pub snap_start_m: Option<f64>,
 }
 
+impl PlanRequest {
+    /// Most vertices a `region` polygon may have (the region mask tests every cell against every edge).
+    pub const MAX_REGION_VERTICES: usize = 4096;
+}
+
 /// What a plan minimises (DESIGN §6), subject to the coverage bar.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
