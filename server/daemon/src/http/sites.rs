@@ -15,12 +15,20 @@ use super::error::{ApiError, ApiJson};
     params(("site" = String, Path, description = "site name: letters, digits, '-', '_'")),
     request_body(content = String, description = "multipart (yaml, image) or JSON grid",
         content_type = "multipart/form-data"),
-    responses((status = 201, body = SiteSummary), (status = 400, body = ErrorBody), (status = 413, body = ErrorBody)))]
+    responses((status = 201, body = SiteSummary),
+        (status = 400, description = "invalid site name or map (named in the message)", body = ErrorBody),
+        (status = 401, description = "no bearer token", body = ErrorBody),
+        (status = 403, description = "wrong bearer token", body = ErrorBody),
+        (status = 408, description = "request not received in time", body = ErrorBody),
+        (status = 413, description = "body over [http] max_body_bytes", body = ErrorBody),
+        (status = 415, body = ErrorBody)))]
 pub async fn upload_map(
     State(state): State<AppState>,
     Path(site): Path<String>,
     req: Request,
 ) -> Result<(StatusCode, ApiJson<SiteSummary>), ApiError> {
+    // The name before the body: a bad name costs the client nothing to learn.
+    shift_engine::site::validate_site_name(&site)?;
     let content_type = req
         .headers()
         .get(header::CONTENT_TYPE)
@@ -68,7 +76,6 @@ pub async fn upload_map(
             "send multipart/form-data (yaml, image) or application/json",
         ));
     };
-    shift_engine::site::validate_site_name(&site)?;
     // Decoding a large image takes a while: off the async workers.
     let record = SiteRecord {
         site,
