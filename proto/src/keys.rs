@@ -52,7 +52,10 @@ pub fn validate_name(what: &'static str, value: &str) -> Result<(), KeyError> {
     if value.len() > MAX_NAME_BYTES {
         return fail("is longer than 64 characters");
     }
-    if !value.bytes().all(|b| b.is_ascii_alphanumeric() || b == b'-' || b == b'_') {
+    if !value
+        .bytes()
+        .all(|b| b.is_ascii_alphanumeric() || b == b'-' || b == b'_')
+    {
         return fail("may hold only letters, digits, '-' and '_'");
     }
     Ok(())

@@ -105,7 +105,9 @@ impl HttpConfig {
         ];
         for (key, v) in nonzero {
             if v == 0 {
-                return Err(crate::error::DaemonError::config(format!("[http] {key} must be at least 1")));
+                return Err(crate::error::DaemonError::config(format!(
+                    "[http] {key} must be at least 1"
+                )));
             }
         }
         if self.max_connections > u32::MAX as usize >> 3 {

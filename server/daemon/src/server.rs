@@ -77,11 +77,10 @@ pub async fn run_with_clock(
     clock: SharedClock,
 ) -> Result<()> {
     config.http.validate()?;
-    let (auth_token, token_source) = crate::http::token::resolve(
-        &config.http.auth_token,
-        &config.http.auth_token_file,
-        &|k| std::env::var(k).ok(),
-    )?;
+    let (auth_token, token_source) =
+        crate::http::token::resolve(&config.http.auth_token, &config.http.auth_token_file, &|k| {
+            std::env::var(k).ok()
+        })?;
     let prometheus = prometheus()?;
     let store = Arc::new(Store::open(&config.store.data_dir)?);
     let views = Arc::new(Views::default());

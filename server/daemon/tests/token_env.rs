@@ -14,8 +14,7 @@ const TOKEN: &str = "env-token-7c1f";
 /// One request with `Connection: close` → status.
 async fn post(port: u16, auth: Option<&str>) -> Result<u16> {
     let mut s = tokio::net::TcpStream::connect(("127.0.0.1", port)).await?;
-    let body = json!({"site": "demo", "start": [0.5, 0.5], "robot": {"radius": 0.15, "tool_width": 0.3}})
-        .to_string();
+    let body = json!({"site": "demo", "start": [0.5, 0.5], "robot": {"radius": 0.15, "tool_width": 0.3}}).to_string();
     let auth = auth.map(|a| format!("Authorization: {a}\r\n")).unwrap_or_default();
     let req = format!(
         "POST /v1/plans HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\nContent-Type: application/json\r\n\
@@ -55,7 +54,10 @@ async fn the_token_from_the_environment_guards_mutations_and_is_never_logged() -
     let dir = tempfile::tempdir()?;
     let port = std::net::TcpListener::bind("127.0.0.1:0")?.local_addr()?.port();
     let config = dir.path().join("shiftd.toml");
-    std::fs::write(&config, "[zenoh]\nenabled = false\n[jobs]\nworkers = 1\nshutdown_grace_s = 0\n")?;
+    std::fs::write(
+        &config,
+        "[zenoh]\nenabled = false\n[jobs]\nworkers = 1\nshutdown_grace_s = 0\n",
+    )?;
     let log = dir.path().join("shiftd.log");
     let child = Command::new(env!("CARGO_BIN_EXE_shiftd"))
         .args(["serve", "--bind", &format!("127.0.0.1:{port}")])

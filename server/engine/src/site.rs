@@ -232,6 +232,9 @@ mod tests {
     fn site_names_follow_the_one_rule() {
         // The rule itself is tested once, in proto; here only that its error names the field.
         let e = validate_site_name("a/b").expect_err("slash");
-        assert!(matches!(&e, EngineError::InvalidRequest(m) if m.starts_with("invalid site `a/b`")), "{e}");
+        assert!(
+            matches!(&e, EngineError::InvalidRequest(m) if m.starts_with("invalid site `a/b`")),
+            "{e}"
+        );
     }
 }

@@ -50,9 +50,7 @@ pub async fn json_errors(State(limits): State<BodyLimits>, req: Request, next: N
         return res;
     }
     let error = match status {
-        StatusCode::PAYLOAD_TOO_LARGE => {
-            ApiError::new(status, "payload_too_large", limits.message(&method, &path))
-        }
+        StatusCode::PAYLOAD_TOO_LARGE => ApiError::new(status, "payload_too_large", limits.message(&method, &path)),
         StatusCode::REQUEST_TIMEOUT => ApiError::new(
             status,
             "request_timeout",

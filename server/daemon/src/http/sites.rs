@@ -4,7 +4,7 @@ use axum::body::Bytes;
 use axum::extract::{FromRequest, Multipart, Path, Request, State};
 use axum::http::{StatusCode, header};
 use shift_engine::{Event, LoadedSite, MapSource, SiteRecord};
-use shift_proto::{ErrorBody, SiteSummary};
+use shift_proto::{ErrorBody, OccupancyGridDoc, SiteSummary};
 
 use super::AppState;
 use super::error::{ApiError, ApiJson};
@@ -39,6 +39,9 @@ pub async fn upload_map(
         let body = Bytes::from_request(req, &())
             .await
             .map_err(|r| ApiError::from_status(r.status(), r.body_text()))?;
+        // The shape first, so a refusal names the field (`origin[0]: number out of range`); the engine then
+        // reads the same text into its grid.
+        let _shape: axum::Json<OccupancyGridDoc> = axum::Json::from_bytes(&body)?;
         let text = String::from_utf8(body.to_vec()).map_err(|_| ApiError::bad_request("body is not UTF-8"))?;
         MapSource::Json { text }
     } else if content_type.starts_with("multipart/form-data") {

@@ -124,7 +124,10 @@ mod tests {
             total
         });
         // 2 KiB through a 64-byte pipe read every 10 ms: ~320 ms in all, longer than the limit.
-        guarded.write_all(&[7u8; 2048]).await.expect("progress resets the clock");
+        guarded
+            .write_all(&[7u8; 2048])
+            .await
+            .expect("progress resets the clock");
         assert_eq!(reader.await.expect("reader"), 2048);
     }
 }

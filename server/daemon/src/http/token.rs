@@ -110,9 +110,8 @@ pub fn resolve(
     let (token, source) = if let Some(v) = from_env {
         (v, TokenSource::Env)
     } else if from_file {
-        let text = std::fs::read_to_string(token_file).map_err(|e| {
-            DaemonError::config(format!("[http] auth_token_file {}: {e}", token_file.display()))
-        })?;
+        let text = std::fs::read_to_string(token_file)
+            .map_err(|e| DaemonError::config(format!("[http] auth_token_file {}: {e}", token_file.display())))?;
         let token = text.strip_suffix('\n').unwrap_or(&text);
         let token = token.strip_suffix('\r').unwrap_or(token).to_owned();
         if token.is_empty() {
@@ -189,11 +188,17 @@ mod tests {
         );
         // An empty variable is no token.
         let empty = |_: &str| Some(String::new());
-        assert_eq!(resolve(&Secret::default(), none, &empty).expect("empty env").1, TokenSource::None);
+        assert_eq!(
+            resolve(&Secret::default(), none, &empty).expect("empty env").1,
+            TokenSource::None
+        );
 
         let e = resolve(&"cfg".into(), &file, &env).expect_err("three sources");
         assert!(e.to_string().contains("more than once"), "{e}");
-        assert!(!e.to_string().contains("from-env") && !e.to_string().contains("cfg\""), "{e}");
+        assert!(
+            !e.to_string().contains("from-env") && !e.to_string().contains("cfg\""),
+            "{e}"
+        );
         std::fs::write(&file, "\n").expect("write");
         assert!(resolve(&Secret::default(), &file, &no_env).is_err(), "empty file");
         std::fs::write(&file, "two words").expect("write");
