@@ -120,6 +120,9 @@ pub struct PlanRequest {
 }
 
 impl PlanRequest {
+    /// Most vertices a `region` polygon may have (the region mask tests every cell against every edge).
+    pub const MAX_REGION_VERTICES: usize = 4096;
+
     /// A request for `robot` on `site` from `start` with every optional field absent (the defaults).
     pub fn new(site: impl Into<String>, start: [f64; 2], robot: RobotSpec) -> Self {
         Self {

@@ -13,6 +13,11 @@ pub struct AttributeDoc {
     pub blobs: Vec<AttributeBlobDoc>,
 }
 
+impl AttributeDoc {
+    /// Most blobs a plan request may carry (the attribute map sums every blob at every cell).
+    pub const MAX_BLOBS: usize = 256;
+}
+
 /// One Gaussian blob of attribute.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]

@@ -30,11 +30,14 @@ pub struct KeyError {
     pub reason: &'static str,
 }
 
-/// Longest accepted name (one key chunk), bytes.
-pub const MAX_NAME_BYTES: usize = 128;
+/// Longest accepted name, bytes (= characters: names are ASCII).
+pub const MAX_NAME_BYTES: usize = 64;
 
-/// Checks that `value` can be one key chunk: non-empty, at most 128 bytes, none of `/ * $ # ?`, no whitespace or
-/// control characters, and not starting with `@` (a verbatim chunk, which wildcards never match).
+/// The one name rule of the whole system, for every name that becomes part of a URL path or a Zenoh key chunk:
+/// sites, robots, plan ids, the fleet, each chunk of the key prefix and of a ROS 2 namespace. A name is 1–64
+/// characters of `[A-Za-z0-9_-]` (so every ROS 2 name fits; no `/`, no wildcard or verbatim characters, no
+/// `.`/`..` path segments, nothing a URL must escape). `what` names the field in the error (`site`,
+/// `robot name`, …).
 pub fn validate_name(what: &'static str, value: &str) -> Result<(), KeyError> {
     let fail = |reason| {
         Err(KeyError {
@@ -47,16 +50,13 @@ pub fn validate_name(what: &'static str, value: &str) -> Result<(), KeyError> {
         return fail("must not be empty");
     }
     if value.len() > MAX_NAME_BYTES {
-        return fail("is longer than 128 bytes");
+        return fail("is longer than 64 characters");
     }
-    if value.contains(['/', '*', '$', '#', '?']) {
-        return fail("must not contain any of / * $ # ?");
-    }
-    if value.chars().any(|c| c.is_whitespace() || c.is_control()) {
-        return fail("must not contain whitespace or control characters");
-    }
-    if value.starts_with('@') {
-        return fail("must not start with @");
+    if !value
+        .bytes()
+        .all(|b| b.is_ascii_alphanumeric() || b == b'-' || b == b'_')
+    {
+        return fail("may hold only letters, digits, '-' and '_'");
     }
     Ok(())
 }
@@ -257,6 +257,7 @@ mod tests {
         assert_eq!(acme.odom("bot_7").as_deref(), Ok("acme/shift/north/robots/bot_7/odom"));
     }
 
+    /// The one test of the name rule (every other crate calls `validate_name`).
     #[test]
     fn invalid_names_are_rejected() {
         let ks = KeySpace::default();
@@ -270,14 +271,21 @@ mod tests {
             "r 1",
             "@r",
             "tab\t",
-            &"x".repeat(129),
+            ".",
+            "..",
+            "r.1",
+            "é",
+            "a%2Fb",
+            &"x".repeat(65),
         ] {
             let err = ks.odom(bad).expect_err(bad);
             assert_eq!(err.what, "robot name");
             assert_eq!(err.value, bad);
             assert!(ks.plan_status(bad).is_err(), "{bad}");
         }
-        assert!(ks.odom("robot-1.a_b").is_ok());
+        for good in ["robot-1_a", "R2", "p-42", &"x".repeat(64)] {
+            assert!(ks.odom(good).is_ok(), "{good}");
+        }
         for (prefix, fleet) in [
             ("", "f"),
             ("/shift", "f"),
@@ -301,7 +309,7 @@ mod tests {
         let err = ks.odom("a/b").expect_err("slash");
         assert_eq!(
             err.to_string(),
-            "invalid robot name `a/b`: must not contain any of / * $ # ?"
+            "invalid robot name `a/b`: may hold only letters, digits, '-' and '_'"
         );
     }
 

@@ -5,6 +5,7 @@
 
 pub mod fleet;
 pub mod path;
+pub mod raw;
 
 use std::path::{Path, PathBuf};
 use std::time::Duration;

@@ -5,6 +5,7 @@ use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 
 use crate::error::{Context, Result};
+use crate::http::token::Secret;
 use serde::Deserialize;
 
 /// Everything `shiftd serve` can be told.
@@ -41,18 +42,34 @@ impl Config {
     }
 }
 
-/// `[http]`.
+/// `[http]`: the API's doors (DESIGN §8). What each limit answers is documented in `deploy/shiftd.toml`.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct HttpConfig {
     /// Listen address.
     pub bind: SocketAddr,
-    /// Largest request body, bytes (413 above).
+    /// Largest map upload body (`POST /v1/sites/{site}/map`), bytes; 413 above.
     pub max_body_bytes: usize,
-    /// Per-request timeout, seconds (event streams exempt).
+    /// Largest body of every other route (plan requests, assignments), bytes; 413 above.
+    pub max_request_bytes: usize,
+    /// Per-request timeout, seconds, body reading included (event streams exempt); 408 after it.
     pub request_timeout_s: u64,
-    /// Bearer token for mutating routes; empty = none.
-    pub auth_token: String,
+    /// A connection that has not sent a whole request head this many seconds after it opened (or after its
+    /// previous response) is closed.
+    pub header_read_timeout_s: u64,
+    /// Open connections at most; more wait in the listen backlog until one closes.
+    pub max_connections: usize,
+    /// A connection whose peer takes no byte of a response (an event stream included) for this many
+    /// seconds is closed.
+    pub write_stall_s: u64,
+    /// Seconds between keep-alive comments on an event stream (a reader that is gone is noticed at the next).
+    pub sse_keep_alive_s: u64,
+    /// `Retry-After` seconds of a 429 (the plan queue is full).
+    pub retry_after_s: u64,
+    /// Bearer token for mutating routes; empty = none (see also `auth_token_file` and `SHIFT_AUTH_TOKEN`).
+    pub auth_token: Secret,
+    /// A file holding the bearer token (one line); empty = none.
+    pub auth_token_file: PathBuf,
 }
 
 impl Default for HttpConfig {
@@ -60,9 +77,43 @@ impl Default for HttpConfig {
         Self {
             bind: SocketAddr::from(([127, 0, 0, 1], 7878)),
             max_body_bytes: 64 << 20,
+            max_request_bytes: 1 << 20,
             request_timeout_s: 30,
-            auth_token: String::new(),
+            header_read_timeout_s: 10,
+            max_connections: 512,
+            write_stall_s: 30,
+            sse_keep_alive_s: 15,
+            retry_after_s: 5,
+            auth_token: Secret::default(),
+            auth_token_file: PathBuf::new(),
         }
+    }
+}
+
+impl HttpConfig {
+    /// Checks the values that must not be zero.
+    pub fn validate(&self) -> Result<()> {
+        let nonzero = [
+            ("max_body_bytes", self.max_body_bytes as u64),
+            ("max_request_bytes", self.max_request_bytes as u64),
+            ("request_timeout_s", self.request_timeout_s),
+            ("header_read_timeout_s", self.header_read_timeout_s),
+            ("max_connections", self.max_connections as u64),
+            ("write_stall_s", self.write_stall_s),
+            ("sse_keep_alive_s", self.sse_keep_alive_s),
+            ("retry_after_s", self.retry_after_s),
+        ];
+        for (key, v) in nonzero {
+            if v == 0 {
+                return Err(crate::error::DaemonError::config(format!(
+                    "[http] {key} must be at least 1"
+                )));
+            }
+        }
+        if self.max_connections > u32::MAX as usize >> 3 {
+            return Err(crate::error::DaemonError::config("[http] max_connections is too large"));
+        }
+        Ok(())
     }
 }
 
@@ -167,9 +218,11 @@ mod tests {
         let e = Config::parse("[http]\nbnd = \"127.0.0.1:1\"").expect_err("typo");
         assert!(format!("{e:#}").contains("bnd"), "{e:#}");
         assert!(Config::parse("[jobs]\nworkers = -1").is_err());
-        let c = Config::parse("[jobs]\nworkers = 3\n[http]\nauth_token = \"s3\"").expect("parses");
+        let c = Config::parse("[jobs]\nworkers = 3\n[http]\nauth_token = \"tok-9f3q\"").expect("parses");
         assert_eq!(c.jobs.effective_workers(), 3);
-        assert_eq!(c.http.auth_token, "s3");
+        assert_eq!(c.http.auth_token, Secret::new("tok-9f3q"));
+        assert!(!format!("{c:?}").contains("tok-9f3q"), "the token never prints");
+        assert!(Config::parse("[http]\nmax_connections = 0").is_ok_and(|c| c.http.validate().is_err()));
         let c = Config::parse("[zenoh]\nmapping = { kind = \"rmw_zenoh\", domain = 7 }").expect("rmw_zenoh");
         assert_eq!(c.zenoh.mapping, shift_proto::keys::Ros2Mapping::RmwZenoh { domain: 7 });
         let c = Config::parse("[zenoh.mapping]\nkind = \"bridge_ros2dds\"\nnamespace = \"site1\"").expect("bridge");

@@ -23,7 +23,8 @@ use crate::config::Config;
 use crate::engine_loop::handle::{EngineHandle, Msg};
 use crate::engine_loop::{self, LoopParts};
 use crate::fleet::{self, Fleet, FleetParts};
-use crate::http::{AppState, router};
+use crate::http::serve::{ConnLimits, serve};
+use crate::http::{AppState, BodyLimits, router};
 use crate::record::Recording;
 use crate::store::Store;
 use crate::views::Views;
@@ -75,6 +76,11 @@ pub async fn run_with_clock(
     shutdown: impl Future<Output = ()> + Send + 'static,
     clock: SharedClock,
 ) -> Result<()> {
+    config.http.validate()?;
+    let (auth_token, token_source) =
+        crate::http::token::resolve(&config.http.auth_token, &config.http.auth_token_file, &|k| {
+            std::env::var(k).ok()
+        })?;
     let prometheus = prometheus()?;
     let store = Arc::new(Store::open(&config.store.data_dir)?);
     let views = Arc::new(Views::default());
@@ -142,20 +148,29 @@ pub async fn run_with_clock(
         events,
         shutdown: token.clone(),
         prometheus,
-        auth_token: Arc::from(config.http.auth_token.as_str()),
-        max_body_bytes: config.http.max_body_bytes,
+        auth_token: Arc::new(auth_token),
+        body_limits: BodyLimits {
+            map_bytes: config.http.max_body_bytes,
+            request_bytes: config.http.max_request_bytes,
+        },
         request_timeout: Duration::from_secs(config.http.request_timeout_s.max(1)),
+        sse_keep_alive: Duration::from_secs(config.http.sse_keep_alive_s.max(1)),
+        retry_after_s: config.http.retry_after_s,
     };
     let addr = listener.local_addr()?;
-    tracing::info!(%addr, data_dir = %config.store.data_dir.display(), "shiftd serving");
+    tracing::info!(%addr, data_dir = %config.store.data_dir.display(), auth = ?token_source, "shiftd serving");
     let stop = token.clone();
-    axum::serve(listener, router(state))
-        .with_graceful_shutdown(async move {
-            shutdown.await;
-            stop.cancel();
-        })
-        .await
-        .context("serving HTTP")?;
+    tokio::spawn(async move {
+        shutdown.await;
+        stop.cancel();
+    });
+    let limits = ConnLimits {
+        header_read_timeout: Duration::from_secs(config.http.header_read_timeout_s.max(1)),
+        max_connections: config.http.max_connections.max(1),
+        write_stall: Duration::from_secs(config.http.write_stall_s.max(1)),
+        drain: Duration::from_secs(config.http.request_timeout_s.max(1)),
+    };
+    serve(listener, router(state), limits, token).await;
 
     if let Some(f) = fleet {
         f.shutdown().await;

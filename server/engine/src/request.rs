@@ -8,7 +8,7 @@ pub use shift_planner::geom::point_in_polygon;
 use shift_planner::map::grid::OccupancyGrid;
 use shift_planner::order::OrderMethod;
 use shift_planner::pattern::PatternMethod;
-use shift_proto::PlanRequest;
+use shift_proto::{AttributeDoc, PlanRequest};
 
 use crate::error::{EngineError, Result};
 
@@ -74,9 +74,20 @@ pub fn parse_options(req: &PlanRequest) -> Result<ParsedOptions> {
 
 /// Validates a request against the site's grid.
 pub fn validate(req: &PlanRequest, grid: &OccupancyGrid) -> Result<ParsedOptions> {
+    crate::site::validate_name("site", &req.site)?;
     let r = &req.robot;
     positive("robot.radius", r.radius)?;
     positive("robot.tool_width", r.tool_width)?;
+    // Lanes are a tool width apart: a tool much narrower than a cell asks for more lanes than the map has
+    // cells across (a 1e-9 m tool on a 10 m room is 10^10 lanes).
+    let cell = grid.geometry.resolution;
+    if r.tool_width < cell / 2.0 {
+        return Err(invalid(format!(
+            "robot.tool_width must be at least half a map cell ({} m on this site), got {}",
+            cell / 2.0,
+            r.tool_width
+        )));
+    }
     positive("robot.v_min", r.v_min)?;
     positive("robot.v_max", r.v_max)?;
     positive("robot.a_max", r.a_max)?;
@@ -104,6 +115,13 @@ pub fn validate(req: &PlanRequest, grid: &OccupancyGrid) -> Result<ParsedOptions
         return Err(invalid(format!("snap_start_m must be zero or more metres, got {d}")));
     }
     if let Some(a) = &req.attribute {
+        if a.blobs.len() > AttributeDoc::MAX_BLOBS {
+            return Err(invalid(format!(
+                "attribute.blobs holds {} blobs; at most {} are accepted",
+                a.blobs.len(),
+                AttributeDoc::MAX_BLOBS
+            )));
+        }
         for (i, b) in a.blobs.iter().enumerate() {
             finite(&format!("attribute.blobs[{i}].x"), b.x)?;
             finite(&format!("attribute.blobs[{i}].y"), b.y)?;
@@ -119,6 +137,13 @@ pub fn validate(req: &PlanRequest, grid: &OccupancyGrid) -> Result<ParsedOptions
     if let Some(poly) = &req.region {
         if poly.len() < 3 {
             return Err(invalid(format!("region needs at least 3 vertices, got {}", poly.len())));
+        }
+        if poly.len() > PlanRequest::MAX_REGION_VERTICES {
+            return Err(invalid(format!(
+                "region has {} vertices; at most {} are accepted",
+                poly.len(),
+                PlanRequest::MAX_REGION_VERTICES
+            )));
         }
         for (i, p) in poly.iter().enumerate() {
             finite(&format!("region[{i}][0]"), p[0])?;
@@ -197,6 +222,30 @@ mod tests {
         let mut r = request();
         r.region = Some(vec![[2.0, 2.0], [3.0, 2.0], [3.0, 3.0]]);
         assert!(validate(&r, &g).is_err(), "start outside the region");
+        let mut r = request();
+        r.robot.tool_width = 1e-9;
+        let e = validate(&r, &g).expect_err("a tool narrower than half a cell");
+        assert!(e.to_string().contains("robot.tool_width"), "{e}");
+        let mut r = request();
+        r.site = "a/b".into();
+        let e = validate(&r, &g).expect_err("site name");
+        assert!(e.to_string().contains("invalid site"), "{e}");
+        let mut r = request();
+        r.region = Some(vec![[1.0, 1.0]; PlanRequest::MAX_REGION_VERTICES + 1]);
+        let e = validate(&r, &g).expect_err("too many vertices");
+        assert!(e.to_string().contains("region has"), "{e}");
+        let mut r = request();
+        let blob = shift_proto::AttributeBlobDoc {
+            x: 1.0,
+            y: 1.0,
+            sigma: 1.0,
+            amplitude: 0.5,
+        };
+        r.attribute = Some(AttributeDoc {
+            blobs: vec![blob; AttributeDoc::MAX_BLOBS + 1],
+        });
+        let e = validate(&r, &g).expect_err("too many blobs");
+        assert!(e.to_string().contains("attribute.blobs"), "{e}");
         for d in [f64::NAN, -1.0, f64::INFINITY] {
             let mut r = request();
             r.snap_start_m = Some(d);

@@ -40,6 +40,16 @@ pub enum PlannerError {
         /// Height in cells.
         height: usize,
     },
+    /// More cells than [`crate::map::GridGeometry::MAX_CELLS`] (or a width × height that overflows).
+    #[error("map too large: width {width} × height {height} cells is over the limit of {max_cells} cells")]
+    MapTooLarge {
+        /// Width in cells.
+        width: usize,
+        /// Height in cells.
+        height: usize,
+        /// The limit.
+        max_cells: usize,
+    },
     /// The resolution is zero, negative or not finite.
     #[error("map resolution must be a positive finite number of metres per cell, got {0}")]
     InvalidResolution(f64),

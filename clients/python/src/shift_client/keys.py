@@ -6,10 +6,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-MAX_NAME_BYTES = 128
-"""Longest accepted name (one key chunk), bytes."""
+MAX_NAME_BYTES = 64
+"""Longest accepted name, characters (names are ASCII)."""
 
-_FORBIDDEN = "/*$#?"
+_ALLOWED = frozenset("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_")
 
 
 class InvalidName(ValueError):
@@ -25,18 +25,14 @@ class InvalidName(ValueError):
 
 
 def validate_name(what: str, value: str) -> None:
-    """Checks that ``value`` can be one key chunk: non-empty, at most 128 bytes (UTF-8), none of ``/ * $ # ?``,
-    no whitespace or control characters, not starting with ``@``."""
+    """The one name rule (``proto/src/keys.rs`` ``validate_name``): 1-64 characters of ``[A-Za-z0-9_-]``, for
+    sites, robots, plan ids, the fleet and each prefix chunk."""
     if not value:
         raise InvalidName(what, value, "must not be empty")
-    if len(value.encode("utf-8")) > MAX_NAME_BYTES:
-        raise InvalidName(what, value, "is longer than 128 bytes")
-    if any(c in _FORBIDDEN for c in value):
-        raise InvalidName(what, value, "must not contain any of / * $ # ?")
-    if any(c.isspace() or not c.isprintable() for c in value):
-        raise InvalidName(what, value, "must not contain whitespace or control characters")
-    if value.startswith("@"):
-        raise InvalidName(what, value, "must not start with @")
+    if len(value) > MAX_NAME_BYTES:
+        raise InvalidName(what, value, "is longer than 64 characters")
+    if any(c not in _ALLOWED for c in value):
+        raise InvalidName(what, value, "may hold only letters, digits, '-' and '_'")
 
 
 def validate_path(what: str, value: str) -> None:

@@ -1,22 +1,31 @@
-//! Bearer-token check on mutating routes (POST, PUT, PATCH, DELETE) when a token is configured:
-//! missing → 401, wrong → 403. Reads are open (operators watch status from a browser).
+//! Bearer-token check on mutating routes (POST, PUT, PATCH, DELETE) when a token is configured. Reads are open
+//! (operators watch status from a browser).
+//!
+//! - no `Authorization` header, or one that is not `Bearer <token>` → **401** `unauthorized`, with
+//!   `WWW-Authenticate: Bearer` (the client did not authenticate);
+//! - a bearer token that is not the configured one, whatever its length → **403** `forbidden`.
+//!
+//! The comparison is [`super::token::token_matches`] (constant time); the token is never logged.
 
 use std::sync::Arc;
 
 use axum::extract::{Request, State};
-use axum::http::{Method, StatusCode, header};
+use axum::http::{HeaderValue, Method, StatusCode, header};
 use axum::middleware::Next;
 use axum::response::{IntoResponse, Response};
 
 use super::error::ApiError;
+use super::token::{Secret, token_matches};
 
-/// Compares in time independent of where the first difference is.
-fn same(a: &[u8], b: &[u8]) -> bool {
-    a.len() == b.len() && a.iter().zip(b).fold(0u8, |acc, (x, y)| acc | (x ^ y)) == 0
+/// The token of a `Bearer` authorization header (the scheme is case-insensitive, RFC 7235).
+fn bearer(req: &Request) -> Option<&[u8]> {
+    let value = req.headers().get(header::AUTHORIZATION)?.as_bytes();
+    let (scheme, rest) = value.split_at_checked(7)?;
+    scheme.eq_ignore_ascii_case(b"bearer ").then(|| rest.trim_ascii())
 }
 
-/// The middleware; `token` empty = no authentication.
-pub async fn require_token(State(token): State<Arc<str>>, req: Request, next: Next) -> Response {
+/// The middleware; an empty `token` = no authentication.
+pub async fn require_token(State(token): State<Arc<Secret>>, req: Request, next: Next) -> Response {
     let mutating = matches!(
         *req.method(),
         Method::POST | Method::PUT | Method::PATCH | Method::DELETE
@@ -24,29 +33,24 @@ pub async fn require_token(State(token): State<Arc<str>>, req: Request, next: Ne
     if token.is_empty() || !mutating {
         return next.run(req).await;
     }
-    let given = req
-        .headers()
-        .get(header::AUTHORIZATION)
-        .and_then(|v| v.to_str().ok())
-        .and_then(|v| v.strip_prefix("Bearer "));
-    match given {
-        None => ApiError::new(
-            StatusCode::UNAUTHORIZED,
-            "unauthorized",
-            "this route needs a bearer token",
+    match bearer(&req) {
+        None => {
+            let mut res = ApiError::new(
+                StatusCode::UNAUTHORIZED,
+                "unauthorized",
+                "Authorization: this route needs a bearer token (Authorization: Bearer <token>)",
+            )
+            .into_response();
+            res.headers_mut()
+                .insert(header::WWW_AUTHENTICATE, HeaderValue::from_static("Bearer"));
+            res
+        }
+        Some(given) if bool::from(token_matches(given, &token)) => next.run(req).await,
+        Some(_) => ApiError::new(
+            StatusCode::FORBIDDEN,
+            "forbidden",
+            "Authorization: the bearer token is not valid",
         )
         .into_response(),
-        Some(t) if same(t.trim().as_bytes(), token.as_bytes()) => next.run(req).await,
-        Some(_) => ApiError::new(StatusCode::FORBIDDEN, "forbidden", "the bearer token is not valid").into_response(),
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn same_compares_fully() {
-        assert!(super::same(b"abc", b"abc"));
-        assert!(!super::same(b"abc", b"abd"));
-        assert!(!super::same(b"abc", b"ab"));
     }
 }

@@ -3,7 +3,7 @@
 
 use axum::Json;
 use axum::extract::rejection::JsonRejection;
-use axum::http::StatusCode;
+use axum::http::{HeaderValue, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use shift_engine::EngineError;
 use shift_proto::{ErrorBody, ErrorDetail};
@@ -19,6 +19,8 @@ pub struct ApiError {
     pub code: &'static str,
     /// What is wrong and where.
     pub message: String,
+    /// Seconds for a `Retry-After` header (429, 503).
+    pub retry_after_s: Option<u64>,
 }
 
 impl ApiError {
@@ -28,6 +30,15 @@ impl ApiError {
             status,
             code,
             message: message.into(),
+            retry_after_s: None,
+        }
+    }
+
+    /// The same error with a `Retry-After: secs` header.
+    pub fn with_retry_after(self, secs: u64) -> Self {
+        Self {
+            retry_after_s: Some(secs),
+            ..self
         }
     }
 
@@ -62,7 +73,11 @@ impl IntoResponse for ApiError {
                 message: self.message,
             },
         };
-        (self.status, Json(body)).into_response()
+        let mut res = (self.status, Json(body)).into_response();
+        if let Some(secs) = self.retry_after_s {
+            res.headers_mut().insert(header::RETRY_AFTER, HeaderValue::from(secs));
+        }
+        res
     }
 }
 

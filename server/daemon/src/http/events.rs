@@ -2,7 +2,8 @@
 //! plan still planning, the regions it already streamed follow (so a client that connects late can start a
 //! robot on them too); then progress, region-ready and status events in the order the engine published them.
 //! The stream ends after a failed / cancelled / done status, and on shutdown (otherwise graceful shutdown
-//! would wait forever).
+//! would wait forever). A keep-alive comment goes out every `[http] sse_keep_alive_s`, so a reader that is gone
+//! is noticed; a reader that stops reading is cut after `[http] write_stall_s` (`serve.rs`).
 
 use std::collections::HashSet;
 use std::convert::Infallible;
@@ -73,7 +74,7 @@ pub async fn plan_events(
     let events = subscription(first, replay, live)
         .map(|e| Ok(to_sse(&e)))
         .take_until(state.shutdown.clone().cancelled_owned());
-    Ok(Sse::new(events).keep_alive(KeepAlive::default()))
+    Ok(Sse::new(events).keep_alive(KeepAlive::new().interval(state.sse_keep_alive)))
 }
 
 /// One subscription's events: `first` (the current status); for a plan still planning, `replay` — the

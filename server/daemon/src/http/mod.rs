@@ -1,15 +1,24 @@
 //! The HTTP API (DESIGN §5.3): one [`router`] built from an [`AppState`] of handles and snapshots (no
 //! algorithm, no lock around the engine). Handlers are grouped by resource; errors in `error.rs`.
+//!
+//! The doors (DESIGN §8), outermost first: the connection loop (`serve.rs`: header read timeout, connection
+//! cap, write stalls), uniform error bodies (`json_errors.rs`), the request timeout, the bearer token
+//! (`auth.rs`, `token.rs`), then per route the body limit (tower-http's `RequestBodyLimitLayer`: a declared
+//! `Content-Length` over it is refused before the body is read, a chunked body is cut at it).
 
 mod auth;
 pub mod error;
 mod events;
+mod json_errors;
 mod listings;
 mod openapi;
 mod ops;
 mod plans;
 mod robots;
+pub mod serve;
 mod sites;
+pub mod stall;
+pub mod token;
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -17,14 +26,16 @@ use std::time::Duration;
 use axum::Router;
 use axum::extract::DefaultBodyLimit;
 use axum::http::StatusCode;
-use axum::routing::{get, post};
+use axum::routing::{MethodRouter, get, post};
 use metrics_exporter_prometheus::PrometheusHandle;
 use shift_proto::PlanEvent;
 use tokio::sync::broadcast;
 use tokio_util::sync::CancellationToken;
+use tower_http::limit::RequestBodyLimitLayer;
 use tower_http::timeout::TimeoutLayer;
 use tower_http::trace::TraceLayer;
 
+pub use json_errors::BodyLimits;
 pub use openapi::ApiDoc;
 
 use shift_engine::LiveMaps;
@@ -54,11 +65,24 @@ pub struct AppState {
     /// Prometheus exposition.
     pub prometheus: PrometheusHandle,
     /// Bearer token for mutating routes; empty = none.
-    pub auth_token: Arc<str>,
-    /// Largest request body, bytes.
-    pub max_body_bytes: usize,
+    pub auth_token: Arc<token::Secret>,
+    /// Largest request bodies, bytes, per route.
+    pub body_limits: BodyLimits,
     /// Per-request timeout.
     pub request_timeout: Duration,
+    /// Keep-alive interval of event streams.
+    pub sse_keep_alive: Duration,
+    /// `Retry-After` of a full plan queue, seconds.
+    pub retry_after_s: u64,
+}
+
+/// A route whose body may hold at most `bytes`: tower-http's limit (a `Content-Length` over it is refused
+/// before the body is read; a chunked body is cut at it), and axum's own extractor limit off, so the
+/// extractors see tower-http's `LengthLimitError` directly (multipart maps it to 413 only then).
+fn limited(route: MethodRouter<AppState>, bytes: usize) -> MethodRouter<AppState> {
+    route
+        .layer::<_, std::convert::Infallible>(RequestBodyLimitLayer::new(bytes))
+        .layer::<_, std::convert::Infallible>(DefaultBodyLimit::disable())
 }
 
 /// The whole API.
@@ -67,21 +91,27 @@ pub fn router(state: AppState) -> Router {
         .route("/v1/sites", get(listings::list_sites))
         .route(
             "/v1/sites/{site}/map",
-            post(sites::upload_map).get(listings::get_site_map),
+            limited(post(sites::upload_map), state.body_limits.map_bytes).get(listings::get_site_map),
         )
         .route("/v1/sites/{site}", get(sites::get_site))
-        .route("/v1/plans", post(plans::create_plan).get(listings::list_plans))
+        .route(
+            "/v1/plans",
+            limited(post(plans::create_plan), state.body_limits.request_bytes).get(listings::list_plans),
+        )
         .route("/v1/plans/{id}", get(plans::get_plan).delete(plans::cancel_plan))
         .route("/v1/plans/{id}/path", get(plans::get_path))
         .route("/v1/plans/{id}/speed-profile", get(plans::get_speed_profile))
-        .route("/v1/plans/{id}/assign", post(robots::assign_plan))
+        .route(
+            "/v1/plans/{id}/assign",
+            limited(post(robots::assign_plan), state.body_limits.request_bytes),
+        )
         .route("/v1/robots", get(robots::list_robots))
         .route("/v1/robots/{id}", get(robots::get_robot))
         .layer(TimeoutLayer::with_status_code(
             StatusCode::REQUEST_TIMEOUT,
             state.request_timeout,
         ))
-        // Event streams live long: no timeout.
+        // Event streams live long: no timeout (a reader that stops reading is cut by `serve`'s write stall).
         .route("/v1/plans/{id}/events", get(events::plan_events))
         .route_layer(axum::middleware::from_fn_with_state(
             state.auth_token.clone(),
@@ -96,7 +126,12 @@ pub fn router(state: AppState) -> Router {
         .route("/docs", get(openapi::docs_page))
         .fallback(|| async { error::ApiError::not_found("no such route") })
         .layer(axum::middleware::from_fn(ops::track))
-        .layer(DefaultBodyLimit::max(state.max_body_bytes))
+        // The routes' own limits decide; this is the backstop of any body-reading route without one.
+        .layer(DefaultBodyLimit::max(state.body_limits.map_bytes))
+        .layer(axum::middleware::from_fn_with_state(
+            state.body_limits,
+            json_errors::json_errors,
+        ))
         .layer(TraceLayer::new_for_http())
         .with_state(state)
 }

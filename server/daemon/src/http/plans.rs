@@ -33,17 +33,30 @@ fn ready_doc(state: &AppState, plan_id: &str) -> Result<std::sync::Arc<PlanDocum
 }
 
 /// Ask for a plan. Answers 202 at once, after the request is committed to the store; the job runs on the
-/// worker pool. Poll `GET /v1/plans/{id}` or follow `/events`.
+/// worker pool. Poll `GET /v1/plans/{id}` or follow `/events`. The whole request is checked before anything
+/// is stored (400 names the field); a full queue answers 429 with `Retry-After`.
 #[utoipa::path(post, path = "/v1/plans", tag = "plans", request_body = PlanRequest,
     responses((status = 202, body = PlanAccepted, headers(("Location" = String))),
-        (status = 400, body = ErrorBody), (status = 401, body = ErrorBody), (status = 403, body = ErrorBody),
+        (status = 400, description = "invalid field (named in the message)", body = ErrorBody),
+        (status = 401, description = "no bearer token", body = ErrorBody),
+        (status = 403, description = "wrong bearer token", body = ErrorBody),
         (status = 404, description = "unknown site", body = ErrorBody),
-        (status = 413, body = ErrorBody), (status = 429, description = "plan queue full", body = ErrorBody)))]
+        (status = 408, description = "request not received in time", body = ErrorBody),
+        (status = 413, description = "body over [http] max_request_bytes", body = ErrorBody),
+        (status = 429, description = "plan queue full", body = ErrorBody,
+            headers(("Retry-After" = u64, description = "seconds to wait before asking again")))))]
 pub async fn create_plan(
     State(state): State<AppState>,
     ApiJson(request): ApiJson<PlanRequest>,
 ) -> Result<(StatusCode, HeaderMap, ApiJson<PlanAccepted>), ApiError> {
-    let reply = state.engine.call(Event::PlanRequested { request }).await?;
+    let reply = state
+        .engine
+        .call(Event::PlanRequested { request })
+        .await
+        .map_err(|e| match ApiError::from(e) {
+            full if full.status == StatusCode::TOO_MANY_REQUESTS => full.with_retry_after(state.retry_after_s),
+            other => other,
+        })?;
     let rec = reply
         .plans
         .into_iter()
@@ -116,8 +129,10 @@ pub async fn get_speed_profile(
 
 /// Cancel a queued or planning plan (409 once it finished).
 #[utoipa::path(delete, path = "/v1/plans/{id}", tag = "plans", params(("id" = String, Path)),
-    responses((status = 200, body = PlanStatusResponse), (status = 404, body = ErrorBody),
-        (status = 409, body = ErrorBody)))]
+    responses((status = 200, body = PlanStatusResponse),
+        (status = 401, description = "no bearer token", body = ErrorBody),
+        (status = 403, description = "wrong bearer token", body = ErrorBody),
+        (status = 404, body = ErrorBody), (status = 409, body = ErrorBody)))]
 pub async fn cancel_plan(
     State(state): State<AppState>,
     Path(id): Path<String>,

@@ -12,13 +12,18 @@ use super::error::{ApiError, ApiJson};
 /// (nav_msgs/Path CDR), served by the plan queryable, and its progress is tracked from odometry.
 #[utoipa::path(post, path = "/v1/plans/{id}/assign", tag = "robots", params(("id" = String, Path)),
     request_body = AssignRequest,
-    responses((status = 200, body = PlanStatusResponse), (status = 400, body = ErrorBody),
-        (status = 404, body = ErrorBody), (status = 409, description = "plan not ready", body = ErrorBody)))]
+    responses((status = 200, body = PlanStatusResponse),
+        (status = 400, description = "invalid field (named in the message)", body = ErrorBody),
+        (status = 401, description = "no bearer token", body = ErrorBody),
+        (status = 403, description = "wrong bearer token", body = ErrorBody),
+        (status = 404, body = ErrorBody), (status = 409, description = "plan not ready", body = ErrorBody),
+        (status = 413, description = "body over [http] max_request_bytes", body = ErrorBody)))]
 pub async fn assign_plan(
     State(state): State<AppState>,
     Path(id): Path<String>,
     ApiJson(req): ApiJson<AssignRequest>,
 ) -> Result<ApiJson<PlanStatusResponse>, ApiError> {
+    shift_engine::site::validate_name("robot", &req.robot)?;
     let view = state
         .views
         .plan(&id)

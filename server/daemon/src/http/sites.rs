@@ -4,7 +4,7 @@ use axum::body::Bytes;
 use axum::extract::{FromRequest, Multipart, Path, Request, State};
 use axum::http::{StatusCode, header};
 use shift_engine::{Event, LoadedSite, MapSource, SiteRecord};
-use shift_proto::{ErrorBody, SiteSummary};
+use shift_proto::{ErrorBody, OccupancyGridDoc, SiteSummary};
 
 use super::AppState;
 use super::error::{ApiError, ApiJson};
@@ -15,12 +15,20 @@ use super::error::{ApiError, ApiJson};
     params(("site" = String, Path, description = "site name: letters, digits, '-', '_'")),
     request_body(content = String, description = "multipart (yaml, image) or JSON grid",
         content_type = "multipart/form-data"),
-    responses((status = 201, body = SiteSummary), (status = 400, body = ErrorBody), (status = 413, body = ErrorBody)))]
+    responses((status = 201, body = SiteSummary),
+        (status = 400, description = "invalid site name or map (named in the message)", body = ErrorBody),
+        (status = 401, description = "no bearer token", body = ErrorBody),
+        (status = 403, description = "wrong bearer token", body = ErrorBody),
+        (status = 408, description = "request not received in time", body = ErrorBody),
+        (status = 413, description = "body over [http] max_body_bytes", body = ErrorBody),
+        (status = 415, body = ErrorBody)))]
 pub async fn upload_map(
     State(state): State<AppState>,
     Path(site): Path<String>,
     req: Request,
 ) -> Result<(StatusCode, ApiJson<SiteSummary>), ApiError> {
+    // The name before the body: a bad name costs the client nothing to learn.
+    shift_engine::site::validate_site_name(&site)?;
     let content_type = req
         .headers()
         .get(header::CONTENT_TYPE)
@@ -31,6 +39,9 @@ pub async fn upload_map(
         let body = Bytes::from_request(req, &())
             .await
             .map_err(|r| ApiError::from_status(r.status(), r.body_text()))?;
+        // The shape first, so a refusal names the field (`origin[0]: number out of range`); the engine then
+        // reads the same text into its grid.
+        let _shape: axum::Json<OccupancyGridDoc> = axum::Json::from_bytes(&body)?;
         let text = String::from_utf8(body.to_vec()).map_err(|_| ApiError::bad_request("body is not UTF-8"))?;
         MapSource::Json { text }
     } else if content_type.starts_with("multipart/form-data") {
@@ -68,7 +79,6 @@ pub async fn upload_map(
             "send multipart/form-data (yaml, image) or application/json",
         ));
     };
-    shift_engine::site::validate_site_name(&site)?;
     // Decoding a large image takes a while: off the async workers.
     let record = SiteRecord {
         site,

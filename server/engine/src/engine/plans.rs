@@ -17,6 +17,8 @@ impl Engine {
         if self.draining {
             return Err(EngineError::ShuttingDown);
         }
+        // A name that breaks the rule is a bad request, not an unknown site.
+        crate::site::validate_site_name(&request.site)?;
         let site = self
             .sites
             .get(&request.site)

@@ -48,11 +48,18 @@ pub struct GridGeometry {
 }
 
 impl GridGeometry {
-    /// Validates and builds a geometry.
+    /// Most cells a grid may have: 64 Mi (8192 × 8192, 410 m square at 5 cm). A plan on it needs a few GiB
+    /// (distance fields, masks, labels); a width and height declared beyond it are refused before anything of
+    /// that size is allocated.
+    pub const MAX_CELLS: usize = 1 << 26;
+
+    /// Validates and builds a geometry: non-empty, at most [`Self::MAX_CELLS`] cells, a positive finite
+    /// resolution and a finite origin.
     pub fn new(width: usize, height: usize, resolution: f64, origin: Point2) -> Result<Self> {
         if width == 0 || height == 0 {
             return Err(PlannerError::EmptyMap { width, height });
         }
+        Self::check_size(width, height)?;
         if !resolution.is_finite() || resolution <= 0.0 {
             return Err(PlannerError::InvalidResolution(resolution));
         }
@@ -64,6 +71,18 @@ impl GridGeometry {
             resolution,
             origin,
         })
+    }
+
+    /// Refuses a width × height over [`Self::MAX_CELLS`] (or one that overflows).
+    pub fn check_size(width: usize, height: usize) -> Result<()> {
+        match width.checked_mul(height) {
+            Some(n) if n <= Self::MAX_CELLS => Ok(()),
+            _ => Err(PlannerError::MapTooLarge {
+                width,
+                height,
+                max_cells: Self::MAX_CELLS,
+            }),
+        }
     }
 
     /// Number of cells.

@@ -124,4 +124,18 @@ mod tests {
         assert!(bad(r#"{"resolution":0.1}"#).is_err());
         assert!(bad("not json").is_err());
     }
+
+    #[test]
+    fn absurd_sizes_are_refused_before_anything_is_allocated() {
+        let bad = |s: &str| JsonGrid::parse(s).and_then(JsonGrid::into_grid);
+        // 10^12 cells declared in a few bytes, and a width × height that overflows usize.
+        for doc in [
+            r#"{"resolution":1,"origin":[0,0],"width":1000000,"height":1000000,"cells":[]}"#,
+            r#"{"resolution":1,"origin":[0,0],"width":18446744073709551615,"height":3,"cells":[]}"#,
+        ] {
+            let e = bad(doc).expect_err(doc);
+            assert!(matches!(e, PlannerError::MapTooLarge { .. }), "{e}");
+            assert!(e.to_string().contains("width"), "{e}");
+        }
+    }
 }

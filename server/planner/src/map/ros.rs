@@ -141,6 +141,13 @@ pub fn load_ros_map(
 
 /// Thresholds decoded image bytes (PGM or PNG) with the YAML's settings.
 pub fn grid_from_image(yaml: &MapYaml, bytes: &[u8]) -> Result<LoadedMap> {
+    // The header's size first: a few bytes may declare an image far too large to decode.
+    let (w, h) = image::ImageReader::new(std::io::Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|e| PlannerError::ImageDecode(e.to_string()))?
+        .into_dimensions()
+        .map_err(|e| PlannerError::ImageDecode(e.to_string()))?;
+    GridGeometry::check_size(w as usize, h as usize)?;
     let img = image::load_from_memory(bytes).map_err(|e| PlannerError::ImageDecode(e.to_string()))?;
     let rgba = img.to_rgba8();
     let (w, h) = (rgba.width() as usize, rgba.height() as usize);
@@ -224,6 +231,14 @@ mod tests {
         assert_eq!(g.state(Cell::new(0, 0)), CellState::Unknown);
         assert_eq!(g.state(Cell::new(1, 0)), CellState::Free);
         assert!(m.warnings.is_empty());
+    }
+
+    #[test]
+    fn an_image_header_declaring_an_absurd_size_is_refused_before_decoding() {
+        // 20 bytes that declare a 10^6 × 10^6 image.
+        let img = pgm(1_000_000, 1_000_000, &[0; 4]);
+        let e = load_ros_map(YAML, |_| Ok(img.clone())).expect_err("too large");
+        assert!(matches!(e, PlannerError::MapTooLarge { .. }), "{e}");
     }
 
     #[test]
