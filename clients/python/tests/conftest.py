@@ -51,7 +51,16 @@ def free_port() -> int:
 class Daemon:
     """A running ``shiftd serve``: ``url`` (HTTP) and ``zenoh_endpoint``."""
 
-    def __init__(self, workdir: Path, *, token: str = "", zenoh: bool = True, demo: bool = True) -> None:
+    def __init__(
+        self,
+        workdir: Path,
+        *,
+        token: str = "",
+        zenoh: bool = True,
+        demo: bool = True,
+        queue_capacity: int = 8,
+        retry_after_s: int = 5,
+    ) -> None:
         self.workdir = workdir
         self.http_port = free_port()
         self.zenoh_port = free_port()
@@ -65,13 +74,14 @@ class Daemon:
 [http]
 bind = "127.0.0.1:{self.http_port}"
 auth_token = "{token}"
+retry_after_s = {retry_after_s}
 
 [store]
 data_dir = "{(workdir / 'data').as_posix()}"
 
 [jobs]
 workers = 1
-queue_capacity = 8
+queue_capacity = {queue_capacity}
 shutdown_grace_s = 0
 
 [demo]
@@ -144,5 +154,13 @@ def daemon(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Daemon]:
 def token_daemon(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Daemon]:
     """A shiftd with a bearer token on mutating routes (Zenoh off)."""
     d = Daemon(tmp_path_factory.mktemp("shiftd-token"), token="s3cret-token", zenoh=False)
+    yield d
+    d.stop()
+
+
+@pytest.fixture(scope="session")
+def busy_daemon(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Daemon]:
+    """A shiftd whose plan queue holds one plan (one worker, Zenoh off) and asks 429s to wait 1 s."""
+    d = Daemon(tmp_path_factory.mktemp("shiftd-busy"), zenoh=False, queue_capacity=1, retry_after_s=1)
     yield d
     d.stop()

@@ -164,3 +164,26 @@ def test_mutating_routes_need_the_bearer_token(token_daemon: Daemon) -> None:
     with Client(token_daemon.url, token=token_daemon.token) as authorised:
         accepted = authorised.create_plan(DEMO)
         assert authorised.wait_for_plan(accepted.plan_id).status == "ready"
+
+
+def test_a_full_queue_says_when_to_come_back_and_create_plan_can_wait(busy_daemon: Daemon) -> None:
+    with Client(busy_daemon.url) as api:
+        accepted: List[str] = []
+        refused = None
+        for _ in range(200):
+            try:
+                accepted.append(api.create_plan(DEMO).plan_id)
+            except ShiftError as e:
+                refused = e
+                break
+        assert refused is not None, f"{len(accepted)} plans accepted, none refused"
+        assert (refused.status, refused.code, refused.retry_after_s) == (429, "queue_full", 1.0)
+        # Waiting as the daemon asks, the same request gets in once the worker frees a place.
+        late = api.create_plan(DEMO, busy_wait_s=120.0)
+        for plan_id in accepted + [late.plan_id]:
+            assert api.wait_for_plan(plan_id).status == "ready"
+        # Without a wait the 429 is raised at once.
+        with pytest.raises(ShiftError) as e:
+            for _ in range(200):
+                api.create_plan(DEMO)
+        assert e.value.status == 429

@@ -3,7 +3,9 @@ parsing, the PointCloud2 CDR layout, error bodies."""
 
 from __future__ import annotations
 
+import pickle
 import struct
+from datetime import datetime, timezone
 
 import pytest
 
@@ -25,6 +27,7 @@ from shift_client import (
     Waypoint,
 )
 from shift_client.cdr import encode_point_cloud2_xyz, split_stamp
+from shift_client.errors import parse_retry_after
 from shift_client.events import decode_messages, iter_sse
 from shift_client.keys import InvalidName
 from shift_client.types import AttributeBlob, PlanOptions
@@ -229,3 +232,17 @@ def test_plan_documents_round_trip() -> None:
     assert doc.regions[0].polygon[2] == (3.0, 3.0)
     assert doc.metrics is not None and doc.metrics.turns == 80 and doc.metrics.dwell_cv is None
     assert PlanDocument.from_json(doc.to_json()) == doc
+
+
+def test_retry_after_reads_seconds_and_http_dates() -> None:
+    now = datetime(2026, 12, 3, 12, 0, 0, tzinfo=timezone.utc)
+    assert parse_retry_after("5") == 5.0
+    assert parse_retry_after(" 0 ") == 0.0
+    assert parse_retry_after("Thu, 03 Dec 2026 12:00:30 GMT", now) == 30.0
+    assert parse_retry_after("Thu, 03 Dec 2026 11:00:00 GMT", now) == 0.0, "a date gone by waits nothing"
+    assert parse_retry_after("soon") is None
+    assert parse_retry_after("-3") is None
+    assert parse_retry_after(None) is None
+    e = ShiftError.from_response(429, b'{"error": {"code": "queue_full", "message": "full"}}', {"retry-after": "7"})
+    assert (e.code, e.retry_after_s) == ("queue_full", 7.0)
+    assert pickle.loads(pickle.dumps(e)).retry_after_s == 7.0

@@ -149,8 +149,13 @@ impl Client {
             return Ok(r);
         }
         let status = r.status();
+        let retry_after = r
+            .headers()
+            .get(reqwest::header::RETRY_AFTER)
+            .and_then(|v| v.to_str().ok())
+            .map(str::to_owned);
         let body = r.bytes().await.unwrap_or_default();
-        Err(ClientError::from_answer(status, &body))
+        Err(ClientError::from_answer(status, &body, retry_after.as_deref()))
     }
 
     /// Sends and decodes a JSON answer.

@@ -40,6 +40,29 @@ impl Client {
         .await
     }
 
+    /// [`Client::create_plan`], sent again while the plan queue is full (429) after the wait the daemon asks for
+    /// (`Retry-After`; 1 s when it gives none), for at most `max_wait` in all. The last 429 is returned when the
+    /// time is up; any other error at once.
+    pub async fn create_plan_waiting(
+        &self,
+        request: &PlanRequest,
+        max_wait: std::time::Duration,
+    ) -> Result<PlanAccepted> {
+        let deadline = tokio::time::Instant::now() + max_wait;
+        loop {
+            match self.create_plan(request).await {
+                Err(e) if e.status() == Some(reqwest::StatusCode::TOO_MANY_REQUESTS) => {
+                    let wait = e.retry_after().unwrap_or(std::time::Duration::from_secs(1));
+                    if tokio::time::Instant::now() + wait > deadline {
+                        return Err(e);
+                    }
+                    tokio::time::sleep(wait).await;
+                }
+                other => return other,
+            }
+        }
+    }
+
     /// `GET /v1/plans/{id}`: status, progress, metrics once ready, error once failed.
     ///
     /// ```no_run

@@ -101,7 +101,7 @@ class Client:
 
     def _request(self, method: str, path: str, **kwargs: Any) -> Any:
         r = self._http.request(method, path, **kwargs)
-        err = error_for(r.status_code, r.content)
+        err = error_for(r.status_code, r.content, r.headers)
         if err is not None:
             raise err
         return r.json()
@@ -159,10 +159,23 @@ class Client:
 
     # --- plans ------------------------------------------------------------------------------------------------
 
-    def create_plan(self, request: PlanRequest) -> PlanAccepted:
+    def create_plan(self, request: PlanRequest, busy_wait_s: float = 0.0) -> PlanAccepted:
         """``POST /v1/plans``: the plan is queued (202); follow it with :meth:`wait_for_plan` or
-        :meth:`plan_events`."""
-        return PlanAccepted.from_json(self._request("POST", "/v1/plans", json=request.to_json()))
+        :meth:`plan_events`.
+
+        A full queue answers 429 (``queue_full``) with ``Retry-After``. With ``busy_wait_s`` > 0 the request is
+        sent again after the wait the daemon asks for (1 s when it names none) for up to that many seconds in
+        all; the last 429 is raised when the time is up.
+        """
+        deadline = time.monotonic() + max(0.0, busy_wait_s)
+        while True:
+            try:
+                return PlanAccepted.from_json(self._request("POST", "/v1/plans", json=request.to_json()))
+            except ShiftError as e:
+                wait = e.retry_after_s if e.retry_after_s is not None else 1.0
+                if e.status != 429 or time.monotonic() + wait > deadline:
+                    raise
+                time.sleep(wait)
 
     def get_plan(self, plan_id: str) -> PlanInfo:
         """``GET /v1/plans/{id}``: status, progress 0-1, version, metrics once ready."""
@@ -212,7 +225,7 @@ class Client:
                 body = r.read()
             finally:
                 r.close()
-            raise ShiftError.from_response(r.status_code, body)
+            raise ShiftError.from_response(r.status_code, body, r.headers)
         return PlanEvents(r)
 
     # --- robots -----------------------------------------------------------------------------------------------

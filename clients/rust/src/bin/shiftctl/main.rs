@@ -71,7 +71,7 @@ fn exit_code(e: &anyhow::Error) -> u8 {
 }
 
 fn report(e: &anyhow::Error, json: bool) {
-    if json && let Some(ClientError::Api { status, error }) = e.downcast_ref::<ClientError>() {
+    if json && let Some(ClientError::Api { status, error, .. }) = e.downcast_ref::<ClientError>() {
         let body = serde_json::json!({"status": status.as_u16(), "error": error});
         eprintln!("{body}");
         return;

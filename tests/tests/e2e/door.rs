@@ -553,3 +553,31 @@ async fn fifty_plan_requests_202_up_to_the_queue_then_429_with_retry_after() -> 
     assert!(upload["413"].is_object(), "{upload}");
     server.stop().await
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_sdk_waits_as_a_full_queue_asks_and_gets_in() -> Result<()> {
+    let dir = tempfile::tempdir()?;
+    let mut config = test_config(dir.path());
+    (
+        config.jobs.workers,
+        config.jobs.queue_capacity,
+        config.http.retry_after_s,
+    ) = (1, 1, 1);
+    let server = TestServer::start(config).await?;
+    let client = shift_client::Client::new(&server.base)?;
+    let request: shift_proto::PlanRequest = serde_json::from_value(demo_request())?;
+    let mut refused = None;
+    for _ in 0..200 {
+        if let Err(e) = client.create_plan(&request).await {
+            refused = Some(e);
+            break;
+        }
+    }
+    let refused = refused.context("the queue never filled")?;
+    assert_eq!(refused.code(), Some("queue_full"), "{refused}");
+    assert_eq!(refused.retry_after(), Some(Duration::from_secs(1)));
+    let late = client.create_plan_waiting(&request, Duration::from_secs(120)).await?;
+    let (status, _) = server.get(&format!("/v1/plans/{}", late.plan_id)).await?;
+    assert_eq!(status, 200);
+    server.stop().await
+}

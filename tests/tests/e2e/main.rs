@@ -1,0 +1,12 @@
+//! The end-to-end suite: one test binary (one link of shiftd and Zenoh instead of one per file), a module per
+//! area. Each starts shiftd in-process on 127.0.0.1 with Zenoh in peer mode on loopback only.
+
+mod architecture;
+mod corrections;
+mod door;
+mod fleet_engine;
+mod fleet_ros2;
+mod fleet_zenoh;
+mod http_api;
+mod listings;
+mod record_replay;
