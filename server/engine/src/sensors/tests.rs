@@ -139,6 +139,26 @@ fn a_scan_just_ahead_of_the_newest_pose_waits_for_the_next_one_before_the_tolera
 }
 
 #[test]
+fn a_robot_whose_clock_restarts_is_placed_on_its_new_clock() {
+    // A robot ran for an hour of its clock, then restarted: its stamps begin again near zero.
+    let mut h = hub(Some("demo"));
+    for k in 0..5 {
+        h.odometry("r1", odom(9.0, 3600 * SEC + k * SEC / 10), 0);
+    }
+    let out = h.odometry("r1", odom(1.0, 2 * SEC), 10);
+    assert!(out.clock_jumped_back && out.pose.is_some());
+    // Before the fix the scan was dropped at once as older than the hour-old history.
+    let out = h.sensor("r1", Stream::Scan, &scan(2 * SEC + SEC / 20), 20);
+    assert!(out.is_empty(), "waits for the odometry at its stamp: {out:?}");
+    let next = h.odometry("r1", odom(1.1, 2 * SEC + SEC / 10), 30);
+    assert!(!next.clock_jumped_back);
+    let p = placed(&next.released);
+    assert_eq!(p.len(), 1, "{:?}", next.released);
+    // Placed with the new clock's poses (x = 1.05 at its stamp), not the hour-old one (x = 9).
+    assert!((p[0].points[0][0] - 2.05).abs() < 1e-6, "{:?}", p[0].points);
+}
+
+#[test]
 fn a_scan_whose_odometry_never_comes_is_dropped_at_its_deadline_with_the_lookup_reason() {
     let mut h = hub(Some("demo"));
     h.odometry("r1", odom(0.0, SEC), 0);
