@@ -7,6 +7,8 @@ mod door;
 mod fleet_engine;
 mod fleet_ros2;
 mod fleet_zenoh;
+mod fuzz_feed;
+mod fuzz_regressions;
 mod http_api;
 mod listings;
 mod record_replay;
