@@ -46,7 +46,10 @@ class ShiftError(Exception):
     def from_response(cls, status: int, body: bytes, headers: Optional[Mapping[str, str]] = None) -> "ShiftError":
         """The error of an answer with ``status``, ``body`` and ``headers``."""
         text = body.decode("utf-8", errors="replace")
-        retry = parse_retry_after(headers.get("retry-after")) if headers is not None else None
+        retry = None
+        if headers is not None:
+            # httpx's headers ignore case; a plain mapping may carry either spelling.
+            retry = parse_retry_after(headers.get("retry-after") or headers.get("Retry-After"))
         try:
             detail = json.loads(text)["error"]
             return cls(status, str(detail["code"]), str(detail["message"]), retry)
