@@ -15,15 +15,15 @@
 //!
 //! `cargo run --release -p shift-tests --example ingest_bench -- [--seconds 20] [--max-seconds 10] [--points 30000]`
 
-use std::collections::HashMap;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, anyhow, bail};
 use serde_json::json;
 use shift_proto::ros::point_cloud2::encode_point_cloud2_xyz;
 use shift_proto::ros::{Header, Time};
+use shift_tests::bench::{Rng, Rooms, Scrape, quantile, restamp, wall_ns};
 use shift_tests::fleet::{free_port, robot_session};
 use shift_tests::{TestServer, test_config};
 use zenoh::bytes::Encoding;
@@ -33,6 +33,11 @@ use zenoh::qos::CongestionControl;
 const SITE_M: f64 = 100.0;
 /// Room size of the walls' grid, metres.
 const ROOM_M: f64 = 10.0;
+/// The building the clouds see.
+const ROOMS: Rooms = Rooms {
+    site_m: SITE_M,
+    room_m: ROOM_M,
+};
 
 struct Args {
     seconds: u64,
@@ -62,140 +67,10 @@ fn args() -> Result<Args> {
     Ok(a)
 }
 
-/// xorshift64*: a seeded, dependency-free generator for the synthetic clouds.
-struct Rng(u64);
-
-impl Rng {
-    fn next_f64(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
-/// Where a ray from (x, y) at angle `a` meets the next wall of the room grid (walls every ROOM_M, the site's
-/// border included), with 1 cm of range noise.
-fn ray_hit(x: f64, y: f64, a: f64, noise: f64) -> (f64, f64) {
-    let (dx, dy) = (a.cos(), a.sin());
-    let next = |p: f64, d: f64| {
-        if d > 1e-9 {
-            (((p / ROOM_M).floor() + 1.0) * ROOM_M - p) / d
-        } else if d < -1e-9 {
-            (((p / ROOM_M).ceil() - 1.0) * ROOM_M - p) / d
-        } else {
-            f64::INFINITY
-        }
-    };
-    let t = next(x, dx).min(next(y, dy)) + noise;
-    (x + t * dx, y + t * dy)
-}
-
-/// A 3-D cloud of `n` wall points seen from (x, y), map frame.
-fn cloud(rng: &mut Rng, x: f64, y: f64, n: usize) -> Vec<[f32; 3]> {
-    (0..n)
-        .map(|_| {
-            let a = rng.next_f64() * std::f64::consts::TAU;
-            let (hx, hy) = ray_hit(x, y, a, (rng.next_f64() - 0.5) * 0.02);
-            let z = 0.1 + rng.next_f64() * 1.8;
-            [
-                hx.clamp(0.0, SITE_M - 1e-3) as f32,
-                hy.clamp(0.0, SITE_M - 1e-3) as f32,
-                z as f32,
-            ]
-        })
-        .collect()
-}
-
 /// The robot's position at `t` seconds: r1 along the rooms' middle row, r2 along the middle column, 1 m/s.
 fn position(robot: usize, t: f64) -> (f64, f64) {
     let s = 5.0 + (t % 90.0);
     if robot == 0 { (s, 45.0 + 2.5) } else { (52.5, s) }
-}
-
-fn wall_ns() -> i64 {
-    SystemTime::now()
-        .duration_since(UNIX_EPOCH)
-        .map_or(0, |d| d.as_nanos() as i64)
-}
-
-/// Overwrites the header stamp of a little-endian PointCloud2 CDR payload (bytes 4–11) with `ns`.
-fn restamp(cdr: &mut [u8], ns: i64) {
-    let t = Time::from_ns(ns);
-    cdr[4..8].copy_from_slice(&t.sec.to_le_bytes());
-    cdr[8..12].copy_from_slice(&t.nanosec.to_le_bytes());
-}
-
-/// One scrape of /metrics: plain samples by their full name with labels, plus histogram buckets.
-#[derive(Default)]
-struct Scrape {
-    values: HashMap<String, f64>,
-}
-
-impl Scrape {
-    async fn take(server: &TestServer) -> Result<Self> {
-        let text = server.http.get(server.url("/metrics")).send().await?.text().await?;
-        let mut values = HashMap::new();
-        for line in text.lines().filter(|l| !l.starts_with('#')) {
-            if let Some((k, v)) = line.rsplit_once(' ')
-                && let Ok(v) = v.parse::<f64>()
-            {
-                values.insert(k.to_owned(), v);
-            }
-        }
-        Ok(Self { values })
-    }
-
-    fn get(&self, key: &str) -> f64 {
-        self.values.get(key).copied().unwrap_or(0.0)
-    }
-
-    /// `(le, cumulative count)` of a histogram without labels, ascending, `+Inf` last.
-    fn buckets(&self, name: &str) -> Vec<(f64, f64)> {
-        let prefix = format!("{name}_bucket{{le=\"");
-        let mut b: Vec<(f64, f64)> = self
-            .values
-            .iter()
-            .filter_map(|(k, &v)| {
-                let le = k.strip_prefix(&prefix)?.strip_suffix("\"}")?;
-                let le = if le == "+Inf" { f64::INFINITY } else { le.parse().ok()? };
-                Some((le, v))
-            })
-            .collect();
-        b.sort_by(|x, y| x.0.total_cmp(&y.0));
-        b
-    }
-}
-
-/// The `q` quantile of the observations between two scrapes, interpolated inside its bucket (seconds).
-fn quantile(before: &Scrape, after: &Scrape, name: &str, q: f64) -> Option<f64> {
-    let a = after.buckets(name);
-    let b = before.buckets(name);
-    let diff: Vec<(f64, f64)> = a
-        .iter()
-        .map(|&(le, n)| (le, n - b.iter().find(|x| x.0 == le).map_or(0.0, |x| x.1)))
-        .collect();
-    let total = diff.last()?.1;
-    if total <= 0.0 {
-        return None;
-    }
-    let rank = q * total;
-    let mut prev = (0.0, 0.0);
-    for &(le, n) in &diff {
-        if n >= rank {
-            if le.is_infinite() {
-                return Some(prev.0);
-            }
-            let f = if n > prev.1 {
-                (rank - prev.1) / (n - prev.1)
-            } else {
-                1.0
-            };
-            return Some(prev.0 + f * (le - prev.0));
-        }
-        prev = (le, n);
-    }
-    None
 }
 
 struct Phase {
@@ -362,7 +237,7 @@ async fn main() -> Result<()> {
                     stamp: Time::default(),
                     frame_id: "map".into(),
                 };
-                encode_point_cloud2_xyz(&header, &cloud(&mut rng, x, y, args.points))
+                encode_point_cloud2_xyz(&header, &ROOMS.cloud(&mut rng, x, y, args.points))
             })
             .collect();
         clouds.push(set);

@@ -3,6 +3,7 @@
 //! End-to-end tests start `shiftd` in-process on 127.0.0.1:0 with a temporary data dir and drive it over
 //! HTTP like a fleet backend would. This library holds the harness; the tests are in `tests/`.
 
+pub mod bench;
 pub mod fleet;
 pub mod path;
 pub mod raw;

@@ -3,7 +3,7 @@
 //! know, plus movers), publish odometry and laser scans ray-cast against that world, follow corrections by
 //! version, stop for what their own laser sees in their way, and measure what they really covered.
 //!
-//! Sans-IO core: [`world`], [`drive`], [`pursuit`], [`lidar`], [`robot`], [`sim`], [`measure`]; I/O shell:
+//! Sans-IO core: [`world`], [`drive`], [`pursuit`], [`lidar`], [`robot`], [`sim`], [`measure`], [`sight`]; I/O shell:
 //! [`net`] (Zenoh), [`plans`] (HTTP), [`clock`], [`report`], [`run`].
 
 pub mod clock;
@@ -17,6 +17,7 @@ pub mod pursuit;
 pub mod report;
 pub mod robot;
 pub mod run;
+pub mod sight;
 pub mod sim;
 pub mod spread;
 pub mod world;

@@ -64,6 +64,56 @@ pub struct Report {
     pub robots: Vec<RobotReport>,
     /// The fleet.
     pub fleet: FleetReport,
+    /// What the robots sent and how fast corrections answered what they saw.
+    #[serde(default)]
+    pub traffic: Traffic,
+}
+
+/// The robots' traffic, on the wall clock: messages sent, and correction latency as the robots lived it (see
+/// [`crate::sight`]).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct Traffic {
+    /// Wall-clock seconds the robots drove.
+    pub wall_s: f64,
+    /// Odometry messages published, all robots.
+    pub odom_sent: u64,
+    /// Scans published, all robots.
+    pub scans_sent: u64,
+    /// First sight of something new across a path → the correction applied next, milliseconds.
+    pub correction_latency_ms: Option<Quantiles>,
+    /// Sights no correction followed in time.
+    pub sights_unanswered: u64,
+}
+
+/// A few order statistics of a sample.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Quantiles {
+    /// Sample size.
+    pub n: usize,
+    /// Median.
+    pub p50: f64,
+    /// 99th percentile (nearest rank).
+    pub p99: f64,
+    /// Largest.
+    pub max: f64,
+}
+
+impl Quantiles {
+    /// The statistics of `sample` (`None` when it is empty).
+    pub fn of(sample: &[f64]) -> Option<Self> {
+        let mut s: Vec<f64> = sample.iter().copied().filter(|v| v.is_finite()).collect();
+        if s.is_empty() {
+            return None;
+        }
+        s.sort_by(f64::total_cmp);
+        let rank = |q: f64| s[((q * s.len() as f64).ceil() as usize).clamp(1, s.len()) - 1];
+        Some(Self {
+            n: s.len(),
+            p50: rank(0.5),
+            p99: rank(0.99),
+            max: s[s.len() - 1],
+        })
+    }
 }
 
 impl Report {
@@ -95,7 +145,11 @@ impl Report {
             collisions: robots.iter().map(|r| r.collisions).sum(),
             speedup_achieved: if wall_s > 0.0 { t / wall_s } else { 0.0 },
         };
-        Self { robots, fleet }
+        Self {
+            robots,
+            fleet,
+            traffic: Traffic::default(),
+        }
     }
 
     /// True when every robot finished.
@@ -150,5 +204,19 @@ impl TraceWriter {
             })?;
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quantiles_are_nearest_rank() {
+        let sample: Vec<f64> = (1..=200).map(f64::from).collect();
+        let q = Quantiles::of(&sample).expect("non-empty");
+        assert_eq!((q.n, q.p50, q.p99, q.max), (200, 100.0, 198.0, 200.0));
+        assert_eq!(Quantiles::of(&[f64::NAN]), None);
+        assert_eq!(Quantiles::of(&[7.0]).map(|q| (q.p50, q.p99)), Some((7.0, 7.0)));
     }
 }

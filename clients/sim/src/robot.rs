@@ -18,7 +18,9 @@ const DEFAULT_W_MAX: f64 = 1.5;
 const ALPHA_MAX: f64 = 3.0;
 /// Tolerance of the safety field beyond half a map cell, metres (see [`SimRobot::path_blocked`]).
 const GRAZE_M: f64 = 0.01;
-/// Extra room kept ahead beyond where the body would come to rest, metres.
+/// Extra room kept ahead beyond where the body would come to rest at full speed, metres; it shrinks with the
+/// speed (slack for what the braking model leaves out grows with it), so a robot creeping onto a lane end that
+/// the plan puts at its radius from a wall's cells reaches it instead of standing short.
 const STOP_MARGIN_M: f64 = 0.05;
 /// How far the body may reach into the world before it counts as a collision, metres: plans pass walls at
 /// exactly the radius from non-free cell centres (DESIGN §6), and the simulated controller tracks its path to
@@ -42,12 +44,18 @@ const MAX_BRAKING_STEPS: usize = 2000;
 
 /// Where the body's centre would pass if it took `cmd` for one step of `dt` and then braked to rest holding the
 /// same yaw-rate command, with the body's own acceleration limits (its yaw rate lags the command, so the arc it
-/// really drives is not the commanded one); then [`STOP_MARGIN_M`] on along its final heading.
+/// really drives is not the commanded one); then [`STOP_MARGIN_M`], scaled by the speed of that step over
+/// `v_max`, on along its final heading.
 fn braking_path(body: &DiffDrive, cmd: Command, limits: &Limits, dt: f64) -> Vec<Point2> {
     let mut b = *body;
     let mut path = Vec::new();
     b.step(cmd.v, cmd.w, limits, dt);
     path.push(Point2::new(b.x, b.y));
+    let margin = if limits.v_max > 0.0 {
+        STOP_MARGIN_M * (b.v.abs() / limits.v_max).min(1.0)
+    } else {
+        STOP_MARGIN_M
+    };
     let mut n = 0;
     while b.v > 0.0 && n < MAX_BRAKING_STEPS {
         b.step(0.0, cmd.w, limits, dt);
@@ -56,7 +64,7 @@ fn braking_path(body: &DiffDrive, cmd: Command, limits: &Limits, dt: f64) -> Vec
     }
     let (c, s) = (b.yaw.cos(), b.yaw.sin());
     for k in 1..=2 {
-        let d = STOP_MARGIN_M * f64::from(k) / 2.0;
+        let d = margin * f64::from(k) / 2.0;
         path.push(Point2::new(b.x + d * c, b.y + d * s));
     }
     path
@@ -199,6 +207,25 @@ impl SimRobot {
             }
         }
         applied
+    }
+
+    /// Its last scan's returns in the map frame.
+    pub fn seen(&self) -> &[Point2] {
+        &self.seen
+    }
+
+    /// The waypoints it has still to reach, from its current target on while they stay within `within_m` of
+    /// it (map frame).
+    pub fn path_ahead(&self, within_m: f64) -> Vec<Point2> {
+        let here = self.position();
+        self.followed.doc().map_or_else(Vec::new, |d| {
+            d.waypoints
+                .iter()
+                .skip(self.follower.target())
+                .map(|w| Point2::new(w.x, w.y))
+                .take_while(|p| (*p - here).norm() <= within_m)
+                .collect()
+        })
     }
 
     /// Keeps a scan's returns (robot-frame points) in the map frame for the safety stop.

@@ -14,8 +14,9 @@ use crate::error::SimError;
 use crate::measure::measure;
 use crate::net::RobotNet;
 use crate::plans::plan_and_assign;
-use crate::report::{Report, TraceWriter};
+use crate::report::{Quantiles, Report, TraceWriter, Traffic};
 use crate::robot::SimRobot;
+use crate::sight::{SightClock, WatchWindow, news_on_path};
 use crate::sim::{Outgoing, SimConfig, Simulation};
 use crate::world::World;
 
@@ -54,6 +55,8 @@ pub struct RunOptions {
 
 /// How long planning may take per run.
 const PLAN_TIMEOUT: Duration = Duration::from_secs(300);
+/// How long a robot's sight of something new on its path waits for a correction, wall seconds.
+const SIGHT_PATIENCE_S: f64 = 2.0;
 /// Wall-clock seconds between progress lines.
 const PROGRESS_EVERY_S: f64 = 10.0;
 
@@ -104,19 +107,33 @@ pub async fn run(opts: &RunOptions) -> Result<Report, SimError> {
         .transpose()?;
     let clock = clock.pace_from_now();
     let mut next_progress = PROGRESS_EVERY_S;
+    // Correction latency as the robots live it, with the daemon's default watch window.
+    let window = WatchWindow::default();
+    let mut sights = vec![SightClock::new(SIGHT_PATIENCE_S); sim.robots.len()];
+    let mut traffic = Traffic::default();
     while sim.t < opts.timeout_s && !sim.all_finished() {
         while let Ok((i, message)) = messages.try_recv() {
-            if let Applied::Gap { .. } = sim.robots[i].on_message(message) {
-                nets[i].request_plan();
+            match sim.robots[i].on_message(message) {
+                Applied::Gap { .. } => nets[i].request_plan(),
+                Applied::Correction { .. } => sights[i].on_correction(clock.wall_s()),
+                _ => {}
             }
         }
         for out in sim.step() {
             match out {
-                Outgoing::Odom { robot, body } => nets[robot].odometry(&body, clock.stamp_ns(sim.t)).await?,
+                Outgoing::Odom { robot, body } => {
+                    nets[robot].odometry(&body, clock.stamp_ns(sim.t)).await?;
+                    traffic.odom_sent += 1;
+                }
                 Outgoing::Scan { robot, ranges } => {
                     nets[robot]
                         .scan(&sim.config.lidar, &ranges, clock.stamp_ns(sim.t))
-                        .await?
+                        .await?;
+                    traffic.scans_sent += 1;
+                    let r = &sim.robots[robot];
+                    let ahead = r.path_ahead(window.window_radius_m);
+                    let news = news_on_path(r.seen(), &ahead, r.position(), r.spec.radius, window, &static_grid);
+                    sights[robot].on_scan(clock.wall_s(), news);
                 }
             }
         }
@@ -145,7 +162,12 @@ pub async fn run(opts: &RunOptions) -> Result<Report, SimError> {
         w.finish()?;
     }
     let coverage = measure(&static_grid, &sim.robots);
-    let report = Report::new(&sim.robots, &coverage, sim.t, clock.wall_s());
+    let mut report = Report::new(&sim.robots, &coverage, sim.t, clock.wall_s());
+    let latencies: Vec<f64> = sights.iter().flat_map(|s| s.latencies_ms.iter().copied()).collect();
+    traffic.wall_s = clock.wall_s();
+    traffic.correction_latency_ms = Quantiles::of(&latencies);
+    traffic.sights_unanswered = sights.iter().map(|s| s.unanswered).sum();
+    report.traffic = traffic;
     for net in nets {
         net.close().await;
     }

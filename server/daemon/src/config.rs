@@ -38,6 +38,10 @@ impl Config {
             default_site: self.zenoh.default_site(),
             blind_after_ms: self.zenoh.robot_timeout_s.max(1).saturating_mul(1000),
             progress: shift_engine::ProgressParams::default(),
+            retain_plans: match self.store.retain_plans {
+                0 => usize::MAX,
+                n => n,
+            },
         }
     }
 }
@@ -123,12 +127,16 @@ impl HttpConfig {
 pub struct StoreConfig {
     /// Folder of the redb database.
     pub data_dir: PathBuf,
+    /// Settled plans kept (ready, done, failed, cancelled); the oldest beyond it are forgotten when a new plan
+    /// is accepted. 0 keeps every plan.
+    pub retain_plans: usize,
 }
 
 impl Default for StoreConfig {
     fn default() -> Self {
         Self {
             data_dir: PathBuf::from("./shift-data"),
+            retain_plans: 10_000,
         }
     }
 }

@@ -23,9 +23,9 @@ pub enum DaemonError {
     /// The Zenoh session or one of its declarations failed.
     #[error("zenoh: {0}")]
     Zenoh(String),
-    /// The store failed (redb).
+    /// The store failed (redb), classified: full, read-only, other I/O, unusable data.
     #[error("store: {0}")]
-    Store(String),
+    Store(#[from] crate::store::fault::StoreError),
     /// The engine refused.
     #[error(transparent)]
     Engine(#[from] EngineError),
@@ -78,7 +78,25 @@ macro_rules! from_display {
     };
 }
 
-from_display!(Store: redb::Error, redb::DatabaseError, redb::TransactionError, redb::TableError, redb::CommitError, redb::StorageError);
+/// redb's errors become a classified [`crate::store::fault::StoreError`].
+macro_rules! from_store {
+    ($($ty:ty),+ $(,)?) => {
+        $(impl From<$ty> for DaemonError {
+            fn from(e: $ty) -> Self {
+                Self::Store(e.into())
+            }
+        })+
+    };
+}
+
+from_store!(
+    redb::Error,
+    redb::DatabaseError,
+    redb::TransactionError,
+    redb::TableError,
+    redb::CommitError,
+    redb::StorageError
+);
 from_display!(Config: toml::de::Error);
 from_display!(Recording: mcap::McapError);
 from_display!(Other: tokio::task::JoinError, image::ImageError);

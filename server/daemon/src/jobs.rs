@@ -1,4 +1,4 @@
-//! Plan jobs on the blocking pool: run the engine's job function with a monitor wired to the cancel flags and
+//! Plan jobs on the plan pool ([`crate::pools`]): run the engine's job function with a monitor wired to the cancel flags and
 //! the engine thread, turn the planner's output into the plan document, and report back. The engine bounds
 //! how many run at once, so this never queues work of its own.
 
@@ -19,7 +19,7 @@ use crate::engine_loop::handle::{EngineHandle, Msg};
 /// Spawns jobs and holds their cancel flags.
 #[derive(Debug)]
 pub struct JobRunner {
-    runtime: tokio::runtime::Handle,
+    pool: Arc<rayon::ThreadPool>,
     to_engine: EngineHandle,
     cancels: HashMap<String, Arc<AtomicBool>>,
     interrupt: Arc<AtomicBool>,
@@ -64,11 +64,11 @@ impl PlanMonitor for Monitor {
 }
 
 impl JobRunner {
-    /// A runner spawning on `runtime`'s blocking pool and reporting to the engine thread; with `overlay`,
-    /// each job sees its site's live obstacle points (see [`live_overlay`]).
-    pub fn new(runtime: tokio::runtime::Handle, to_engine: EngineHandle, overlay: Option<Arc<LiveMaps>>) -> Self {
+    /// A runner spawning on `pool` and reporting to the engine thread; with `overlay`, each job sees its
+    /// site's live obstacle points (see [`live_overlay`]).
+    pub fn new(pool: Arc<rayon::ThreadPool>, to_engine: EngineHandle, overlay: Option<Arc<LiveMaps>>) -> Self {
         Self {
-            runtime,
+            pool,
             to_engine,
             cancels: HashMap::new(),
             interrupt: Arc::new(AtomicBool::new(false)),
@@ -76,14 +76,14 @@ impl JobRunner {
         }
     }
 
-    /// Starts a job (its live overlay is read on the blocking pool, not on the engine thread).
+    /// Starts a job (its live overlay is read on the plan pool, not on the engine thread).
     pub fn start(&mut self, mut job: PlanJob) {
         let cancel = Arc::new(AtomicBool::new(false));
         self.cancels.insert(job.plan_id.clone(), cancel.clone());
         let interrupt = self.interrupt.clone();
         let to_engine = self.to_engine.clone();
         let overlay = self.overlay.clone();
-        self.runtime.spawn_blocking(move || {
+        self.pool.spawn(move || {
             if let Some(live) = overlay {
                 job.overlay = live_overlay(&live, &job.request.site);
             }

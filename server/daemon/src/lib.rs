@@ -8,12 +8,14 @@
 
 pub mod clock;
 pub mod config;
+pub mod demo;
 pub mod engine_loop;
 pub mod error;
 pub mod eval;
 pub mod fleet;
 pub mod http;
 pub mod jobs;
+pub mod pools;
 pub mod record;
 pub mod render;
 pub mod replay;

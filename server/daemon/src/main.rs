@@ -5,6 +5,12 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
+
+/// jemalloc, not glibc's malloc: the daemon allocates tens of megabytes per plan job and frees them when it
+/// ends; glibc keeps each new high-water mark in its arenas (RSS stepped up by 8-50 MB with bursts of jobs in
+/// the soak), jemalloc hands freed pages back after its decay time (10 s by default).
+#[global_allocator]
+static ALLOCATOR: tikv_jemallocator::Jemalloc = tikv_jemallocator::Jemalloc;
 use clap::{Parser, Subcommand};
 use shift_engine::to_document;
 use shift_planner::decompose::DecompositionMethod;
@@ -36,6 +42,25 @@ enum Command {
     Eval(EvalArgs),
     /// Replay an MCAP recording onto Zenoh with its original timing, or through the engine (--into-engine).
     Replay(shiftd::replay::ReplayArgs),
+    /// The whole fleet loop in one command: the daemon with the demo site and three simulated robots
+    /// (`shift-sim`), one of them meeting a box the daemon does not know; prints progress and the final report.
+    Demo(DemoArgs),
+}
+
+#[derive(clap::Args)]
+struct DemoArgs {
+    /// HTTP address of the demo daemon (the API stays reachable while the robots drive).
+    #[arg(long, default_value = "127.0.0.1:7878")]
+    bind: std::net::SocketAddr,
+    /// The shift-sim binary (default: beside this executable; `cargo build --release -p shift-sim`).
+    #[arg(long)]
+    sim: Option<PathBuf>,
+    /// Simulated seconds per real second.
+    #[arg(long, default_value_t = 5.0)]
+    speedup: f64,
+    /// Folder for the demo's store, world file and report (kept afterwards).
+    #[arg(long, default_value = "./shift-demo")]
+    dir: PathBuf,
 }
 
 #[derive(clap::Args)]
@@ -144,7 +169,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     // The service logs its life at info; the one-shot commands only warnings. RUST_LOG overrides both.
     let default_filter = match cli.command {
-        Command::Serve(_) => "info,tower_http=warn",
+        Command::Serve(_) | Command::Demo(_) => "info,tower_http=warn",
         _ => "warn",
     };
     tracing_subscriber::fmt()
@@ -159,6 +184,7 @@ fn main() -> ExitCode {
         Command::Plan(args) => cmd_plan(args),
         Command::Eval(args) => cmd_eval(args),
         Command::Replay(args) => shiftd::replay::run_cli(args).map_err(anyhow::Error::from),
+        Command::Demo(args) => cmd_demo(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -168,6 +194,37 @@ fn main() -> ExitCode {
             ExitCode::from(2)
         }
     }
+}
+
+fn cmd_demo(args: DemoArgs) -> Result<()> {
+    let sim = match args.sim.or_else(shiftd::demo::sim_beside_me) {
+        Some(sim) => sim,
+        None => anyhow::bail!(
+            "no shift-sim beside shiftd: build both (`cargo build --release -p shiftd -p shift-sim`) or pass --sim PATH"
+        ),
+    };
+    anyhow::ensure!(
+        args.speedup.is_finite() && args.speedup > 0.0,
+        "--speedup: {} is not a positive number",
+        args.speedup
+    );
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .enable_all()
+        .thread_name("shiftd-io")
+        .build()
+        .context("starting the tokio runtime")?;
+    let report = runtime.block_on(async move {
+        survive_file_size_limit();
+        shiftd::demo::run(shiftd::demo::DemoArgs {
+            bind: args.bind,
+            sim,
+            speedup: args.speedup,
+            dir: args.dir,
+        })
+        .await
+    })?;
+    println!("{}", shiftd::demo::table(&report));
+    Ok(())
 }
 
 fn cmd_serve(args: ServeArgs) -> Result<()> {
@@ -199,9 +256,27 @@ fn cmd_serve(args: ServeArgs) -> Result<()> {
         let listener = tokio::net::TcpListener::bind(config.http.bind)
             .await
             .with_context(|| format!("binding {}", config.http.bind))?;
+        survive_file_size_limit();
         shiftd::run(config, listener, shutdown_signal()).await?;
         Ok(())
     })
+}
+
+/// A write past the process's file-size limit (`ulimit -f`, RLIMIT_FSIZE) raises SIGXFSZ, whose default is to
+/// end the process. With a handler the write fails with EFBIG instead, which the store answers as a full disk
+/// (507) while reads go on being served.
+fn survive_file_size_limit() {
+    #[cfg(unix)]
+    match tokio::signal::unix::signal(tokio::signal::unix::SignalKind::from_raw(libc::SIGXFSZ)) {
+        Ok(mut s) => {
+            tokio::spawn(async move {
+                while s.recv().await.is_some() {
+                    tracing::warn!("a write went past the file-size limit (SIGXFSZ): the store reports it as full");
+                }
+            });
+        }
+        Err(e) => tracing::warn!("SIGXFSZ cannot be caught, a file-size limit would end shiftd: {e}"),
+    }
 }
 
 /// Resolves on SIGINT (Ctrl-C) or SIGTERM.

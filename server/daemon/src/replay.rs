@@ -11,6 +11,7 @@
 //!   decision. With `--check` each input's decisions are compared with the recorded ones, and any difference
 //!   (or a gap: a message the recorder had to drop) is a mismatch. Deterministic: for tests and incidents.
 
+use std::borrow::Cow;
 use std::collections::{BTreeMap, HashMap};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -19,6 +20,10 @@ use std::time::Duration;
 use crate::bail;
 use crate::err;
 use crate::error::{Context, Result};
+use mcap::McapError;
+use mcap::read::ChannelAccumulator;
+use mcap::records::{Record, op};
+use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
 use serde_json::Value;
 use shift_engine::recorded::{Decision, RecordedDecisions, RecordedEngineConfig, RecordedInput, decisions_of};
 use shift_engine::{Engine, EngineConfig};
@@ -27,6 +32,11 @@ use zenoh::bytes::Encoding;
 
 use crate::record::channels::Kind;
 use crate::record::writer::recordings_in;
+
+/// The longest record a recording is read with, unless the file is longer: far above any message the daemon
+/// records (a map upload is at most `[http] max_body_bytes`, 64 MiB by default, twice that hex-encoded in its
+/// engine input), far below the lengths only a corrupt file declares.
+const MAX_RECORD_BYTES: usize = 256 << 20;
 
 /// A message to put back on Zenoh.
 #[derive(Debug, Clone, PartialEq)]
@@ -95,12 +105,17 @@ impl Recorded {
 
     fn read_one(&mut self, path: &Path) -> Result<()> {
         let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
-        let stream = mcap::MessageStream::new(&bytes).with_context(|| format!("{} is not MCAP", path.display()))?;
-        for m in stream {
+        self.read_bytes(&bytes, &path.display().to_string())
+    }
+
+    /// Reads one recording held in memory (an MCAP file's bytes; `name` names it in messages), as [`Self::read`]
+    /// reads each file, except that the ingest is left in file order.
+    pub fn read_bytes(&mut self, bytes: &[u8], name: &str) -> Result<()> {
+        for m in Messages::new(bytes) {
             let m = match m {
                 Ok(m) => m,
                 Err(e) => {
-                    tracing::warn!(file = %path.display(), "recording ends early: {e}");
+                    tracing::warn!(file = name, "recording ends early: {e}");
                     break;
                 }
             };
@@ -175,6 +190,130 @@ impl Recorded {
     }
 }
 
+/// The messages of an MCAP file held in memory, in file order, linked to their channels as `mcap::MessageStream`
+/// links them, up to the first error. Unlike it, nothing is reserved at a length the file only declares (a record
+/// in a zstd chunk declaring 2^62 bytes aborted `shiftd replay`, a string declaring 2 GiB had it reserved): reads
+/// stop at the file's end, a record may not exceed [`MAX_RECORD_BYTES`] (or the file's length), and only
+/// schemas, channels and messages are parsed, once their strings fit in their record. The summary after the data
+/// end (which repeats schemas and channels) is not read.
+struct Messages<'a> {
+    reader: LinearReader,
+    channels: ChannelAccumulator<'static>,
+    rest: &'a [u8],
+    done: bool,
+}
+
+impl<'a> Messages<'a> {
+    fn new(bytes: &'a [u8]) -> Self {
+        let options = LinearReaderOptions::default().with_record_length_limit(bytes.len().max(MAX_RECORD_BYTES));
+        Self {
+            reader: LinearReader::new_with_options(options),
+            channels: ChannelAccumulator::default(),
+            rest: bytes,
+            done: false,
+        }
+    }
+
+    fn next_message(&mut self) -> Option<Result<mcap::Message<'static>>> {
+        loop {
+            let (opcode, body) = match self.reader.next_event()? {
+                Ok(LinearReadEvent::ReadRequest(want)) => {
+                    let n = want.min(self.rest.len());
+                    self.reader.insert(n).copy_from_slice(&self.rest[..n]);
+                    self.reader.notify_read(n);
+                    self.rest = &self.rest[n..];
+                    continue;
+                }
+                Ok(LinearReadEvent::Record { opcode, data }) => (opcode, data),
+                Err(e) => return Some(Err(e.into())),
+            };
+            match opcode {
+                op::SCHEMA | op::CHANNEL | op::MESSAGE => {}
+                op::DATA_END => return None,
+                _ => continue,
+            }
+            if !strings_fit(opcode, body) {
+                return Some(Err(err!("record {opcode:#04x} holds a string longer than itself")));
+            }
+            let record = match mcap::parse_record(opcode, body) {
+                Ok(record) => record,
+                Err(e) => return Some(Err(e.into())),
+            };
+            let linked = match record {
+                Record::Schema { header, data } => self.channels.add_schema(header, Cow::Owned(data.into_owned())),
+                Record::Channel(channel) => self.channels.add_channel(channel),
+                Record::Message { header, data } => {
+                    return Some(match self.channels.get(header.channel_id) {
+                        Some(channel) => Ok(mcap::Message {
+                            channel,
+                            sequence: header.sequence,
+                            log_time: header.log_time,
+                            publish_time: header.publish_time,
+                            data: Cow::Owned(data.into_owned()),
+                        }),
+                        None => Err(McapError::UnknownChannel(header.sequence, header.channel_id).into()),
+                    });
+                }
+                _ => Ok(()),
+            };
+            if let Err(e) = linked {
+                return Some(Err(e.into()));
+            }
+        }
+    }
+}
+
+impl Iterator for Messages<'_> {
+    type Item = Result<mcap::Message<'static>>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.done {
+            return None;
+        }
+        let next = self.next_message();
+        self.done = !matches!(next, Some(Ok(_)));
+        next
+    }
+}
+
+/// Whether every length-prefixed string of a schema (name, encoding) or channel (topic, encoding, metadata) record
+/// fits in it: the MCAP parser reserves a string's declared length (up to 4 GiB) before reading it. A record too
+/// short for a length is left to the parser to refuse.
+fn strings_fit(opcode: u8, body: &[u8]) -> bool {
+    let len_at = |at: usize| {
+        body.get(at..at + 4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize)
+    };
+    // The string at `at`: where the next field starts (the record's end when no length is left), or `None` when it
+    // runs past the record.
+    let skip = |at: usize| len_at(at).map_or(Some(body.len()), |n| (n <= body.len() - at - 4).then_some(at + 4 + n));
+    let pair = |at: usize| skip(at).and_then(skip);
+    match opcode {
+        // id; name, encoding (the parser checks the data's length).
+        op::SCHEMA => pair(2).is_some(),
+        // id, schema id; topic, message encoding; the metadata's length in bytes, then its keys and values, read
+        // in pairs while short of that length.
+        op::CHANNEL => {
+            let Some(mut at) = pair(4) else {
+                return false;
+            };
+            let Some(map_len) = len_at(at) else {
+                return true;
+            };
+            let end = (at + 4).saturating_add(map_len);
+            at += 4;
+            while at < end && at < body.len() {
+                match pair(at) {
+                    Some(next) => at = next,
+                    None => return false,
+                }
+            }
+            true
+        }
+        _ => true,
+    }
+}
+
 /// What a replay into the engine found.
 #[derive(Debug, Default)]
 pub struct EngineReplay {
@@ -242,7 +381,23 @@ pub fn into_engine(rec: &Recorded, out: &mut dyn Write, check: bool) -> Result<E
         }
         *last_seq = seq;
         report.inputs += 1;
-        let decisions = decisions_of(&eng.handle(input.event.clone(), input.now_ms));
+        let undone = rec
+            .decisions
+            .get(&(run, seq))
+            .and_then(|r| match r.decisions.as_slice() {
+                [Decision::Undone { error }] => Some(error.clone()),
+                _ => None,
+            });
+        let decisions = match undone {
+            // The live daemon handled it on a snapshot and put the snapshot back: so does the replay.
+            Some(error) => {
+                let snapshot = eng.clone();
+                let _ = eng.handle(input.event.clone(), input.now_ms);
+                *eng = snapshot;
+                vec![Decision::Undone { error }]
+            }
+            None => decisions_of(&eng.handle(input.event.clone(), input.now_ms)),
+        };
         for decision in &decisions {
             let line = DecisionLine {
                 run,
@@ -456,6 +611,98 @@ pub fn run_cli(args: ReplayArgs) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An MCAP record: opcode, length, body.
+    fn record(out: &mut Vec<u8>, opcode: u8, body: &[u8]) {
+        out.push(opcode);
+        out.extend((body.len() as u64).to_le_bytes());
+        out.extend(body);
+    }
+
+    /// An MCAP string or byte array: u32 length, bytes.
+    fn prefixed(out: &mut Vec<u8>, bytes: &[u8]) {
+        out.extend((bytes.len() as u32).to_le_bytes());
+        out.extend(bytes);
+    }
+
+    /// A recording of one liveliness token (header, schema, channel, message), then `tail`.
+    fn token_then(tail: &[u8]) -> Vec<u8> {
+        let mut file = b"\x89MCAP0\r\n".to_vec();
+        record(&mut file, 0x01, &[0; 8]);
+        let mut schema = 1u16.to_le_bytes().to_vec();
+        for s in ["shift.Liveliness", "jsonschema", ""] {
+            prefixed(&mut schema, s.as_bytes());
+        }
+        assert!(strings_fit(op::SCHEMA, &schema));
+        record(&mut file, 0x03, &schema);
+        let mut channel = [1u16.to_le_bytes(), 1u16.to_le_bytes()].concat();
+        for s in ["/shift/liveliness", "json", ""] {
+            prefixed(&mut channel, s.as_bytes());
+        }
+        assert!(strings_fit(op::CHANNEL, &channel));
+        record(&mut file, 0x04, &channel);
+        let mut message = 1u16.to_le_bytes().to_vec();
+        message.extend([0; 20]);
+        message.extend(br#"{"key": "shift/default/robots/r1/alive", "alive": true}"#);
+        record(&mut file, 0x05, &message);
+        file.extend(tail);
+        file
+    }
+
+    /// Reads `file`, which must end early after its token.
+    fn token_only(file: &[u8]) {
+        let mut rec = Recorded::default();
+        rec.read_bytes(file, "corrupt.mcap")
+            .expect("read up to the corrupt record");
+        let token = Action::Token {
+            key: "shift/default/robots/r1/alive".into(),
+            alive: true,
+        };
+        assert_eq!(rec.ingest, vec![(0, token)], "what came before it is kept");
+    }
+
+    /// Found by the `mcap_replay` fuzz target: `mcap::MessageStream` reserved a record's declared length before
+    /// decompressing it, so a corrupt one in a zstd chunk (here 2^62 bytes) aborted `shiftd replay`.
+    #[test]
+    fn a_corrupt_record_length_in_a_compressed_chunk_ends_the_recording_not_the_process() {
+        // A zstd frame of one raw block: the 9 bytes that start a message record of 2^62 bytes.
+        let mut inner = vec![0x05];
+        inner.extend((1u64 << 62).to_le_bytes());
+        let mut zstd = vec![0x28, 0xb5, 0x2f, 0xfd, 0x00, 0x00];
+        zstd.extend(&(1 | (inner.len() as u32) << 3).to_le_bytes()[..3]);
+        zstd.extend(&inner);
+        let mut chunk = [0, 0, inner.len() as u64].map(u64::to_le_bytes).concat();
+        chunk.extend(0u32.to_le_bytes());
+        prefixed(&mut chunk, b"zstd");
+        chunk.extend((zstd.len() as u64).to_le_bytes());
+        chunk.extend(&zstd);
+        let mut tail = Vec::new();
+        record(&mut tail, 0x06, &chunk);
+        token_only(&token_then(&tail));
+    }
+
+    /// Found by the `mcap_replay` fuzz target: the MCAP parser reserves a string's declared length before reading
+    /// it, so a schema or channel naming one of up to 4 GiB had the replay reserve that much.
+    #[test]
+    fn a_string_longer_than_its_record_ends_the_recording() {
+        let mut schema = 2u16.to_le_bytes().to_vec();
+        schema.extend(0x8000_0000u32.to_le_bytes());
+        schema.extend(b"shift.Liveliness");
+        let mut channel = [2u16.to_le_bytes(), 1u16.to_le_bytes()].concat();
+        for s in ["/shift/liveliness", "json"] {
+            prefixed(&mut channel, s.as_bytes());
+        }
+        // Metadata of 4 bytes: a key that fits it, then a value (read with its key) that does not fit the record.
+        channel.extend(4u32.to_le_bytes());
+        prefixed(&mut channel, b"");
+        channel.extend(0x8000_0000u32.to_le_bytes());
+        for (opcode, body) in [(op::SCHEMA, schema), (op::CHANNEL, channel)] {
+            assert!(!strings_fit(opcode, &body), "{opcode}");
+            let mut tail = Vec::new();
+            record(&mut tail, opcode, &body);
+            token_only(&token_then(&tail));
+        }
+    }
 
     #[test]
     fn ros2_topics_map_to_the_keys_the_fleet_reads() {

@@ -25,12 +25,13 @@ use crate::engine_loop::{self, LoopParts};
 use crate::fleet::{self, Fleet, FleetParts};
 use crate::http::serve::{ConnLimits, serve};
 use crate::http::{AppState, BodyLimits, router};
+use crate::pools::Pools;
 use crate::record::Recording;
 use crate::store::Store;
 use crate::views::Views;
 
-const DEMO_YAML: &str = include_str!("../../../tests/fixtures/four-rooms-obstacles/map.yaml");
-const DEMO_IMAGE: &[u8] = include_bytes!("../../../tests/fixtures/four-rooms-obstacles/map.pgm");
+pub(crate) const DEMO_YAML: &str = include_str!("../../../tests/fixtures/four-rooms-obstacles/map.yaml");
+pub(crate) const DEMO_IMAGE: &[u8] = include_bytes!("../../../tests/fixtures/four-rooms-obstacles/map.pgm");
 
 /// The process-wide Prometheus recorder (the `metrics` facade has one global recorder; servers started
 /// in one process, as tests do, share it).
@@ -57,7 +58,30 @@ pub fn prometheus() -> Result<PrometheusHandle> {
         .install_recorder()
         .map_err(|e| err!("prometheus recorder: {e}"))?;
     *slot = Some(handle.clone());
+    let upkept = handle.clone();
+    if let Err(e) = spawn_upkeep(METRICS_UPKEEP, move || upkept.run_upkeep()) {
+        tracing::warn!("no metrics upkeep thread ({e}): histogram samples wait for a scrape of /metrics");
+    }
     Ok(handle)
+}
+
+/// Histogram samples wait in the recorder until something folds them into their buckets: a scrape of
+/// `GET /metrics`, or an upkeep pass. `install_recorder` starts no upkeep of its own, so a daemon nobody
+/// scraped kept every sample (about 16 bytes each: three per ingested scan or cloud, one per path check,
+/// plan and HTTP request; issue 22). A pass every few seconds keeps that buffer small.
+const METRICS_UPKEEP: Duration = Duration::from_secs(5);
+
+/// Calls `upkeep` every `every` on a named thread, for the rest of the process.
+fn spawn_upkeep(every: Duration, upkeep: impl Fn() + Send + 'static) -> std::io::Result<()> {
+    std::thread::Builder::new()
+        .name("metrics-upkeep".into())
+        .spawn(move || {
+            loop {
+                std::thread::sleep(every);
+                upkeep();
+            }
+        })
+        .map(drop)
 }
 
 /// Serves until `shutdown` completes, then drains as described in the module docs.
@@ -112,7 +136,7 @@ pub async fn run_with_clock(
             live: live.clone(),
             overlay: config.jobs.live_overlay,
             sensors: sensors.clone(),
-            runtime: tokio::runtime::Handle::current(),
+            pools: Pools::new(config.jobs.effective_workers()).context("starting the plan and check threads")?,
             recorder: recording.as_ref().map(Recording::recorder),
             clock: clock.clone(),
         },
@@ -262,4 +286,51 @@ async fn restore(
         );
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::time::{Duration, Instant};
+
+    use metrics_exporter_prometheus::PrometheusBuilder;
+
+    use super::spawn_upkeep;
+
+    #[test]
+    fn upkeep_runs_again_and_again() {
+        let passes = Arc::new(AtomicUsize::new(0));
+        let counted = passes.clone();
+        spawn_upkeep(Duration::from_millis(20), move || {
+            counted.fetch_add(1, Ordering::Relaxed);
+        })
+        .expect("thread");
+        let deadline = Instant::now() + Duration::from_secs(10);
+        while passes.load(Ordering::Relaxed) < 3 {
+            assert!(Instant::now() < deadline, "fewer than 3 upkeep passes in 10 s");
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    }
+
+    /// What the upkeep does to samples nobody scraped: folds them into the buckets, none lost.
+    #[test]
+    fn upkeep_keeps_every_histogram_sample() {
+        let recorder = PrometheusBuilder::new()
+            .set_buckets(&[1.0])
+            .expect("buckets")
+            .build_recorder();
+        let handle = recorder.handle();
+        metrics::with_local_recorder(&recorder, || {
+            for _ in 0..1000 {
+                metrics::histogram!("upkept_seconds").record(0.5);
+            }
+        });
+        handle.run_upkeep();
+        metrics::with_local_recorder(&recorder, || metrics::histogram!("upkept_seconds").record(2.0));
+        handle.run_upkeep();
+        let text = handle.render();
+        assert!(text.contains("upkept_seconds_count 1001"), "{text}");
+        assert!(text.contains("upkept_seconds_bucket{le=\"1\"} 1000"), "{text}");
+    }
 }

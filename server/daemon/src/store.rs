@@ -1,15 +1,25 @@
 //! The durable store: one redb database in the data dir holding sites (maps as uploaded), plan records, plan
 //! documents as computed (version 1), the corrections made to them since, and the history of status
-//! transitions. The current version of a plan is its document with its corrections applied in order. Every write is its own committed transaction, so what
-//! the API acknowledged survives a kill -9. Only the engine thread writes; reads at start-up and for results.
+//! transitions. The current version of a plan is its document with its corrections applied in order.
+//!
+//! Every engine event's writes are one committed transaction ([`Store::commit`]), so what the API acknowledged
+//! survives a kill -9 and an event's writes land all or none. Only the engine thread writes; reads happen at
+//! start-up. A failed write is classified ([`fault`]: full, read-only, other I/O); after an I/O failure redb
+//! refuses everything until the database is reopened, which [`Store::recover`] does (redb repairs the file if
+//! the failure interrupted a commit) before it probes with a small write.
 
-use std::path::Path;
+pub mod fault;
 
-use crate::error::{Context, Result};
+use std::path::{Path, PathBuf};
+use std::sync::{Mutex, MutexGuard};
+
 use redb::{Database, ReadableDatabase, ReadableTable, TableDefinition};
 use serde::{Serialize, de::DeserializeOwned};
-use shift_engine::{PlanRecord, SiteRecord};
+use shift_engine::{Command, PlanRecord, SiteRecord};
 use shift_proto::{CorrectionDoc, PlanDocument};
+
+use self::fault::{FaultKind, StoreError};
+use crate::error::{Context, Result};
 
 const SITES: TableDefinition<'_, &str, &[u8]> = TableDefinition::new("sites");
 const PLANS: TableDefinition<'_, &str, &[u8]> = TableDefinition::new("plans");
@@ -18,11 +28,56 @@ const RESULTS: TableDefinition<'_, &str, &[u8]> = TableDefinition::new("results"
 const TRANSITIONS: TableDefinition<'_, (&str, u32), &[u8]> = TableDefinition::new("transitions");
 /// (plan id, version produced) → correction JSON.
 const CORRECTIONS: TableDefinition<'_, (&str, u64), &[u8]> = TableDefinition::new("corrections");
+/// Small bookkeeping: `probe` → the time of the last recovery probe.
+const META: TableDefinition<'_, &str, &[u8]> = TableDefinition::new("meta");
 
 /// The database handle.
 #[derive(Debug)]
 pub struct Store {
-    db: Database,
+    path: PathBuf,
+    /// `None` after a reopen failed; the next write tries again.
+    db: Mutex<Option<Database>>,
+    /// An I/O error latched redb (or the reopen failed): reopen before the next write.
+    broken: Mutex<Option<StoreError>>,
+}
+
+/// One write of an engine event, as [`Store::commit`] takes them.
+#[derive(Debug, Clone, Copy)]
+pub enum Write<'a> {
+    /// A site as uploaded.
+    Site(&'a SiteRecord),
+    /// A plan record (its status appended to the history when it changed).
+    Plan(&'a PlanRecord),
+    /// A plan's computed document.
+    Result {
+        /// Plan id.
+        plan_id: &'a str,
+        /// The document.
+        doc: &'a PlanDocument,
+    },
+    /// A settled plan forgotten (`retain_plans`): its record, document, corrections and history.
+    Forget(&'a str),
+    /// A correction and the plan record at its version.
+    Correction {
+        /// The record at the new version.
+        record: &'a PlanRecord,
+        /// The correction.
+        correction: &'a CorrectionDoc,
+    },
+}
+
+impl<'a> Write<'a> {
+    /// The write a command asks for, if it asks for one.
+    pub fn of(cmd: &'a Command) -> Option<Self> {
+        Some(match cmd {
+            Command::StoreSite(site) => Self::Site(site),
+            Command::StorePlan(rec) => Self::Plan(rec),
+            Command::StoreResult { plan_id, doc } => Self::Result { plan_id, doc },
+            Command::StoreCorrection { record, correction, .. } => Self::Correction { record, correction },
+            Command::ForgetPlan { plan_id } => Self::Forget(plan_id),
+            _ => return None,
+        })
+    }
 }
 
 #[derive(Serialize, serde::Deserialize)]
@@ -37,57 +92,147 @@ fn decode<T: DeserializeOwned>(what: &str, key: &str, bytes: &[u8]) -> Result<T>
     serde_json::from_slice(bytes).with_context(|| format!("store: {what} {key:?} is unreadable"))
 }
 
+fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
+/// Opens `path` and makes sure every table exists.
+fn open_db(path: &Path) -> Result<Database, StoreError> {
+    let db = Database::create(path)?;
+    let txn = db.begin_write()?;
+    txn.open_table(SITES)?;
+    txn.open_table(PLANS)?;
+    txn.open_table(RESULTS)?;
+    txn.open_table(TRANSITIONS)?;
+    txn.open_table(CORRECTIONS)?;
+    txn.open_table(META)?;
+    txn.commit()?;
+    Ok(db)
+}
+
 impl Store {
     /// Opens (or creates) `DIR/shift.redb`, creating the folder and every table.
     pub fn open(data_dir: &Path) -> Result<Self> {
         std::fs::create_dir_all(data_dir).with_context(|| format!("creating data dir {}", data_dir.display()))?;
         let path = data_dir.join("shift.redb");
-        let db = Database::create(&path).with_context(|| format!("opening store {}", path.display()))?;
+        let db = open_db(&path).with_context(|| format!("opening store {}", path.display()))?;
+        Ok(Self {
+            path,
+            db: Mutex::new(Some(db)),
+            broken: Mutex::new(None),
+        })
+    }
+
+    /// Commits `writes` in one transaction: all of them or, on error, none.
+    pub fn commit(&self, writes: &[Write<'_>]) -> Result<(), StoreError> {
+        let mut db = lock(&self.db);
+        self.reopen_if_broken(&mut db)?;
+        let result = Self::write_all(db.as_ref(), writes);
+        if let Err(e) = &result
+            && e.kind.needs_reopen()
+        {
+            *lock(&self.broken) = Some(e.clone());
+        }
+        result
+    }
+
+    /// After a failure: reopens the database (redb repairs an interrupted commit) and commits a small probe
+    /// write. `Ok` means writes work again.
+    pub fn recover(&self, now_ms: u64) -> Result<(), StoreError> {
+        let probe = now_ms.to_le_bytes();
+        let mut db = lock(&self.db);
+        self.reopen_if_broken(&mut db)?;
+        let result = (|| -> Result<(), StoreError> {
+            let db = db
+                .as_ref()
+                .ok_or_else(|| StoreError::new(FaultKind::Io, "the store is closed"))?;
+            let txn = db.begin_write()?;
+            txn.open_table(META)?.insert("probe", probe.as_slice())?;
+            txn.commit()?;
+            Ok(())
+        })();
+        if let Err(e) = &result
+            && e.kind.needs_reopen()
+        {
+            *lock(&self.broken) = Some(e.clone());
+        }
+        result
+    }
+
+    fn reopen_if_broken(&self, db: &mut Option<Database>) -> Result<(), StoreError> {
+        let mut broken = lock(&self.broken);
+        if broken.is_none() {
+            return Ok(());
+        }
+        // redb releases the file when the handle drops; only then can it be opened again.
+        drop(db.take());
+        let reopened = open_db(&self.path)?;
+        tracing::info!(path = %self.path.display(), "store reopened after a failed write");
+        *db = Some(reopened);
+        *broken = None;
+        Ok(())
+    }
+
+    fn write_all(db: Option<&Database>, writes: &[Write<'_>]) -> Result<(), StoreError> {
+        let db = db.ok_or_else(|| StoreError::new(FaultKind::Io, "the store is closed"))?;
         let txn = db.begin_write()?;
-        txn.open_table(SITES)?;
-        txn.open_table(PLANS)?;
-        txn.open_table(RESULTS)?;
-        txn.open_table(TRANSITIONS)?;
-        txn.open_table(CORRECTIONS)?;
+        for w in writes {
+            match *w {
+                Write::Site(site) => {
+                    let bytes = serde_json::to_vec(site)?;
+                    txn.open_table(SITES)?.insert(site.site.as_str(), bytes.as_slice())?;
+                }
+                Write::Plan(rec) => write_plan(&txn, rec)?,
+                Write::Result { plan_id, doc } => {
+                    let bytes = serde_json::to_vec(doc)?;
+                    txn.open_table(RESULTS)?.insert(plan_id, bytes.as_slice())?;
+                }
+                Write::Forget(plan_id) => forget_plan(&txn, plan_id)?,
+                Write::Correction { record, correction } => {
+                    let bytes = serde_json::to_vec(correction)?;
+                    txn.open_table(CORRECTIONS)?
+                        .insert((correction.plan_id.as_str(), correction.version), bytes.as_slice())?;
+                    write_plan(&txn, record)?;
+                }
+            }
+        }
         txn.commit()?;
-        Ok(Self { db })
+        Ok(())
     }
 
     /// Persists a site.
     pub fn put_site(&self, site: &SiteRecord) -> Result<()> {
-        let bytes = serde_json::to_vec(site)?;
-        let txn = self.db.begin_write()?;
-        txn.open_table(SITES)?.insert(site.site.as_str(), bytes.as_slice())?;
-        txn.commit()?;
-        Ok(())
+        Ok(self.commit(&[Write::Site(site)])?)
     }
 
     /// Persists a plan record and appends its status to the plan's history when it changed.
     pub fn put_plan(&self, rec: &PlanRecord) -> Result<()> {
-        let txn = self.db.begin_write()?;
-        write_plan(&txn, rec)?;
-        txn.commit()?;
-        Ok(())
+        Ok(self.commit(&[Write::Plan(rec)])?)
     }
 
     /// Persists a correction and the plan record at its version in one transaction.
-    pub fn put_correction(&self, rec: &PlanRecord, correction: &CorrectionDoc) -> Result<()> {
-        let bytes = serde_json::to_vec(correction)?;
-        let txn = self.db.begin_write()?;
-        txn.open_table(CORRECTIONS)?
-            .insert((correction.plan_id.as_str(), correction.version), bytes.as_slice())?;
-        write_plan(&txn, rec)?;
-        txn.commit()?;
-        Ok(())
+    pub fn put_correction(&self, record: &PlanRecord, correction: &CorrectionDoc) -> Result<()> {
+        Ok(self.commit(&[Write::Correction { record, correction }])?)
+    }
+
+    /// Persists a plan document.
+    pub fn put_result(&self, plan_id: &str, doc: &PlanDocument) -> Result<()> {
+        Ok(self.commit(&[Write::Result { plan_id, doc }])?)
+    }
+
+    fn read(&self) -> Result<redb::ReadTransaction> {
+        let db = lock(&self.db);
+        let db = db.as_ref().context("store: closed after a failed reopen")?;
+        Ok(db.begin_read().map_err(StoreError::from)?)
     }
 
     /// A plan's corrections in version order.
     pub fn corrections(&self, plan_id: &str) -> Result<Vec<CorrectionDoc>> {
-        let txn = self.db.begin_read()?;
-        let t = txn.open_table(CORRECTIONS)?;
+        let txn = self.read()?;
+        let t = txn.open_table(CORRECTIONS).map_err(StoreError::from)?;
         let mut out = Vec::new();
-        for item in t.range((plan_id, 0)..=(plan_id, u64::MAX))? {
-            let (_, v) = item?;
+        for item in t.range((plan_id, 0)..=(plan_id, u64::MAX)).map_err(StoreError::from)? {
+            let (_, v) = item.map_err(StoreError::from)?;
             out.push(decode("correction", plan_id, v.value())?);
         }
         Ok(out)
@@ -111,15 +256,6 @@ impl Store {
         Ok(Some(doc))
     }
 
-    /// Persists a plan document.
-    pub fn put_result(&self, plan_id: &str, doc: &PlanDocument) -> Result<()> {
-        let bytes = serde_json::to_vec(doc)?;
-        let txn = self.db.begin_write()?;
-        txn.open_table(RESULTS)?.insert(plan_id, bytes.as_slice())?;
-        txn.commit()?;
-        Ok(())
-    }
-
     /// Every site.
     pub fn sites(&self) -> Result<Vec<SiteRecord>> {
         self.all(SITES, "site")
@@ -132,20 +268,21 @@ impl Store {
 
     /// A plan's document.
     pub fn result(&self, plan_id: &str) -> Result<Option<PlanDocument>> {
-        let txn = self.db.begin_read()?;
-        let t = txn.open_table(RESULTS)?;
-        t.get(plan_id)?
+        let txn = self.read()?;
+        let t = txn.open_table(RESULTS).map_err(StoreError::from)?;
+        t.get(plan_id)
+            .map_err(StoreError::from)?
             .map(|g| decode("result", plan_id, g.value()))
             .transpose()
     }
 
     /// A plan's status history: (status, at_ms) in order.
     pub fn history(&self, plan_id: &str) -> Result<Vec<(shift_proto::PlanStatus, u64)>> {
-        let txn = self.db.begin_read()?;
-        let t = txn.open_table(TRANSITIONS)?;
+        let txn = self.read()?;
+        let t = txn.open_table(TRANSITIONS).map_err(StoreError::from)?;
         let mut out = Vec::new();
-        for item in t.range((plan_id, 0)..=(plan_id, u32::MAX))? {
-            let (_, v) = item?;
+        for item in t.range((plan_id, 0)..=(plan_id, u32::MAX)).map_err(StoreError::from)? {
+            let (_, v) = item.map_err(StoreError::from)?;
             let tr: Transition = decode("transition", plan_id, v.value())?;
             out.push((tr.status, tr.at_ms));
         }
@@ -153,42 +290,54 @@ impl Store {
     }
 
     fn all<T: DeserializeOwned>(&self, def: TableDefinition<'_, &str, &[u8]>, what: &str) -> Result<Vec<T>> {
-        let txn = self.db.begin_read()?;
-        let t = txn.open_table(def)?;
+        let txn = self.read()?;
+        let t = txn.open_table(def).map_err(StoreError::from)?;
         let mut out = Vec::new();
-        for item in t.iter()? {
-            let (k, v) = item?;
+        for item in t.iter().map_err(StoreError::from)? {
+            let (k, v) = item.map_err(StoreError::from)?;
             out.push(decode(what, k.value(), v.value())?);
         }
         Ok(out)
     }
 }
 
+/// Removes every row of a plan inside `txn`.
+fn forget_plan(txn: &redb::WriteTransaction, plan_id: &str) -> Result<(), StoreError> {
+    txn.open_table(PLANS)?.remove(plan_id)?;
+    txn.open_table(RESULTS)?.remove(plan_id)?;
+    txn.open_table(TRANSITIONS)?
+        .retain_in((plan_id, 0)..=(plan_id, u32::MAX), |_, _| false)?;
+    txn.open_table(CORRECTIONS)?
+        .retain_in((plan_id, 0)..=(plan_id, u64::MAX), |_, _| false)?;
+    Ok(())
+}
+
 /// Writes a plan record and appends its status to the history when it changed, inside `txn`.
-fn write_plan(txn: &redb::WriteTransaction, rec: &PlanRecord) -> Result<()> {
+fn write_plan(txn: &redb::WriteTransaction, rec: &PlanRecord) -> Result<(), StoreError> {
     let bytes = serde_json::to_vec(rec)?;
-    {
-        let mut plans = txn.open_table(PLANS)?;
-        let previous = plans
-            .get(rec.plan_id.as_str())?
-            .map(|g| decode::<PlanRecord>("plan", &rec.plan_id, g.value()))
-            .transpose()?;
-        plans.insert(rec.plan_id.as_str(), bytes.as_slice())?;
-        let mut history = txn.open_table(TRANSITIONS)?;
-        let last = history
-            .range((rec.plan_id.as_str(), 0)..=(rec.plan_id.as_str(), u32::MAX))?
-            .next_back()
-            .transpose()?
-            .map(|(k, _)| k.value().1);
-        if previous.as_ref().is_none_or(|p| p.status != rec.status) {
-            let t = Transition {
-                status: rec.status,
-                at_ms: rec.updated_ms,
-                error: rec.error.clone(),
-            };
-            let n = last.map_or(0, |n| n + 1);
-            history.insert((rec.plan_id.as_str(), n), serde_json::to_vec(&t)?.as_slice())?;
-        }
+    let mut plans = txn.open_table(PLANS)?;
+    let previous = match plans.get(rec.plan_id.as_str())? {
+        Some(g) => Some(
+            serde_json::from_slice::<PlanRecord>(g.value())
+                .map_err(|e| StoreError::new(FaultKind::Data, format!("plan {:?} is unreadable: {e}", rec.plan_id)))?,
+        ),
+        None => None,
+    };
+    plans.insert(rec.plan_id.as_str(), bytes.as_slice())?;
+    let mut history = txn.open_table(TRANSITIONS)?;
+    let last = history
+        .range((rec.plan_id.as_str(), 0)..=(rec.plan_id.as_str(), u32::MAX))?
+        .next_back()
+        .transpose()?
+        .map(|(k, _)| k.value().1);
+    if previous.as_ref().is_none_or(|p| p.status != rec.status) {
+        let t = Transition {
+            status: rec.status,
+            at_ms: rec.updated_ms,
+            error: rec.error.clone(),
+        };
+        let n = last.map_or(0, |n| n + 1);
+        history.insert((rec.plan_id.as_str(), n), serde_json::to_vec(&t)?.as_slice())?;
     }
     Ok(())
 }
@@ -328,5 +477,25 @@ mod tests {
             Some(doc),
             "the computed version is kept"
         );
+    }
+
+    #[test]
+    fn a_forgotten_plan_leaves_no_row_and_its_neighbours_stay() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let store = Store::open(dir.path()).expect("open");
+        for id in ["p-1", "p-10"] {
+            store.put_plan(&record(id, PlanStatus::Queued, 1)).expect("queued");
+            store.put_plan(&record(id, PlanStatus::Ready, 2)).expect("ready");
+        }
+        store.commit(&[Write::Forget("p-1")]).expect("forget");
+        let ids: Vec<String> = store.plans().expect("plans").into_iter().map(|p| p.plan_id).collect();
+        assert_eq!(ids, vec!["p-10".to_string()]);
+        assert!(store.history("p-1").expect("history").is_empty());
+        assert_eq!(
+            store.history("p-10").expect("history").len(),
+            2,
+            "p-10 shares p-1's key prefix"
+        );
+        assert!(store.corrections("p-1").expect("corrections").is_empty());
     }
 }

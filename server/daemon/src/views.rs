@@ -27,6 +27,8 @@ pub struct Views {
     sites: RwLock<BTreeMap<String, SiteSummary>>,
     site_maps: RwLock<HashMap<String, Arc<OccupancyGrid>>>,
     robots: RwLock<BTreeMap<String, RobotView>>,
+    /// Why the store does not write now (`/readyz` tells).
+    store_fault: RwLock<Option<crate::store::fault::StoreError>>,
 }
 
 impl Views {
@@ -123,6 +125,16 @@ impl Views {
         }
     }
 
+    /// Forgets a plan (`retain_plans`): the API answers 404 for it after.
+    pub fn forget_plan(&self, plan_id: &str) {
+        if let Ok(mut plans) = self.plans.write() {
+            plans.remove(plan_id);
+        }
+        if let Ok(mut r) = self.regions.write() {
+            r.remove(plan_id);
+        }
+    }
+
     /// Sets a plan's document (the record follows in the same engine step).
     pub fn set_doc(&self, plan_id: &str, doc: Arc<PlanDocument>) {
         if let Ok(mut plans) = self.plans.write()
@@ -172,6 +184,18 @@ impl Views {
     pub fn set_site(&self, summary: SiteSummary) {
         if let Ok(mut sites) = self.sites.write() {
             sites.insert(summary.site.clone(), summary);
+        }
+    }
+
+    /// Why the store does not write now, if it does not.
+    pub fn store_fault(&self) -> Option<crate::store::fault::StoreError> {
+        self.store_fault.read().ok().and_then(|f| f.clone())
+    }
+
+    /// Sets (or clears) why the store does not write.
+    pub fn set_store_fault(&self, fault: Option<crate::store::fault::StoreError>) {
+        if let Ok(mut f) = self.store_fault.write() {
+            *f = fault;
         }
     }
 }

@@ -1,4 +1,4 @@
-//! Path checks on the blocking pool: the engine asks for a check of one robot's path
+//! Path checks on the check pool ([`crate::pools`]): the engine asks for a check of one robot's path
 //! ([`shift_engine::CheckJob`]); this runs the engine's pure check function with the site's live obstacle
 //! tree under its read lock (the ingest thread, the only writer, waits at most one check), times it, and
 //! reports back. The engine keeps at most one check per robot in flight, so this never queues work itself.
@@ -14,26 +14,22 @@ use crate::engine_loop::handle::{EngineHandle, Msg};
 /// Spawns checks.
 #[derive(Debug)]
 pub struct CheckRunner {
-    runtime: tokio::runtime::Handle,
+    pool: Arc<rayon::ThreadPool>,
     to_engine: EngineHandle,
     live: Arc<LiveMaps>,
 }
 
 impl CheckRunner {
-    /// A runner on `runtime`'s blocking pool reading `live` and reporting to the engine thread.
-    pub fn new(runtime: tokio::runtime::Handle, to_engine: EngineHandle, live: Arc<LiveMaps>) -> Self {
-        Self {
-            runtime,
-            to_engine,
-            live,
-        }
+    /// A runner on `pool` reading `live` and reporting to the engine thread.
+    pub fn new(pool: Arc<rayon::ThreadPool>, to_engine: EngineHandle, live: Arc<LiveMaps>) -> Self {
+        Self { pool, to_engine, live }
     }
 
     /// Starts a check.
     pub fn start(&self, job: CheckJob) {
         let to_engine = self.to_engine.clone();
         let live = self.live.clone();
-        self.runtime.spawn_blocking(move || {
+        self.pool.spawn(move || {
             let t = Instant::now();
             let site = live.get(&job.site);
             let result = std::panic::catch_unwind(AssertUnwindSafe(|| match &site {

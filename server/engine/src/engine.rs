@@ -6,6 +6,8 @@ mod events;
 mod fleet;
 mod plans;
 
+use std::sync::Arc;
+
 use std::collections::{BTreeMap, HashMap, HashSet, VecDeque};
 
 use shift_proto::{PlanEvent, PlanStatus, PoseView, RobotView, SiteSummary};
@@ -34,6 +36,9 @@ pub struct EngineConfig {
     pub blind_after_ms: u64,
     /// Progress tracking tolerances.
     pub progress: ProgressParams,
+    /// Settled plans kept (ready, done, failed, cancelled: not queued, planning or driven); the oldest beyond it
+    /// are forgotten — by the engine, the read model and the store — when a new plan is accepted.
+    pub retain_plans: usize,
 }
 
 impl Default for EngineConfig {
@@ -45,15 +50,19 @@ impl Default for EngineConfig {
             default_site: None,
             blind_after_ms: 5_000,
             progress: ProgressParams::default(),
+            retain_plans: usize::MAX,
         }
     }
 }
 
 /// The fleet brain. See the crate docs.
-#[derive(Debug, Default)]
+///
+/// `Clone` is a snapshot: the daemon takes one before a client's request and puts it back when the store could
+/// not commit what the request decided (sites are shared, so a snapshot copies plan and robot records only).
+#[derive(Debug, Default, Clone)]
 pub struct Engine {
     config: EngineConfig,
-    sites: BTreeMap<String, Site>,
+    sites: BTreeMap<String, Arc<Site>>,
     plans: HashMap<String, PlanRecord>,
     queue: VecDeque<String>,
     running: HashSet<String>,
@@ -97,7 +106,7 @@ impl Engine {
                 });
                 let last_fed_ms = self.sites.get(&site.record.site).map_or(0, |s| s.last_fed_ms);
                 self.sites
-                    .insert(site.record.site.clone(), Site { last_fed_ms, ..site });
+                    .insert(site.record.site.clone(), Arc::new(Site { last_fed_ms, ..site }));
             }
             Event::PlanRequested { request } => self.request(request, now_ms, &mut out)?,
             Event::CancelRequested { plan_id } => self.cancel(&plan_id, now_ms, &mut out)?,
@@ -151,7 +160,7 @@ impl Engine {
 
     /// A site's summary.
     pub fn site(&self, site: &str) -> Option<SiteSummary> {
-        self.sites.get(site).map(Site::summary)
+        self.sites.get(site).map(|s| s.summary())
     }
 
     /// A robot's view.

@@ -10,6 +10,8 @@ use shift_planner::geom::Point2;
 use shift_planner::map::DistanceField;
 use shift_planner::map::ikd_tree::{Aabb, IkdError, IkdParams, IkdTree, Point3};
 
+use crate::sensors::sweep::Sweep;
+
 /// Knobs of a live map.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LiveMapParams {
@@ -27,6 +29,9 @@ pub struct LiveMapParams {
     /// again (walls, known furniture; the slack absorbs localisation error), not new obstacles: they are
     /// not stored, metres. 0 keeps everything.
     pub known_tolerance_m: f32,
+    /// A scan clears the scan points its rays saw through by more than this, metres (range noise and pose
+    /// error; see [`crate::sensors::sweep`]). 0 turns clearing off: points then leave only by the horizon.
+    pub clear_margin_m: f32,
 }
 
 impl Default for LiveMapParams {
@@ -38,6 +43,7 @@ impl Default for LiveMapParams {
             max_points: 2_000_000,
             horizon_ms: 600_000,
             known_tolerance_m: 0.1,
+            clear_margin_m: 0.1,
         }
     }
 }
@@ -72,6 +78,8 @@ pub struct LiveMapStats {
     pub points_over_cap: u64,
     /// Points deleted by the horizon in total.
     pub points_expired: u64,
+    /// Points deleted because a scan saw through them, in total.
+    pub points_cleared: u64,
     /// Last ingest, milliseconds since the Unix epoch (0 = never).
     pub last_update_ms: u64,
 }
@@ -198,6 +206,46 @@ impl LiveMap {
         report
     }
 
+    /// Deletes the scan points (z = 0) that `sweep`'s rays saw through by more than `clear_margin_m`: an obstacle
+    /// that moved away (a person, a trolley) or was never there (a reflection). Cloud points (3-D, with a height)
+    /// are left to the horizon: a planar laser does not see their heights. Returns how many points went.
+    pub fn clear_through(&mut self, sweep: &Sweep) -> usize {
+        let margin = f64::from(self.params.clear_margin_m);
+        let reach = sweep.max_reach();
+        if margin <= 0.0 || reach <= margin || self.tree.is_empty() {
+            return 0;
+        }
+        let [ox, oy] = sweep.origin;
+        let (r, h) = (reach as f32, self.params.voxel_m / 2.0);
+        let near = Aabb::new(
+            Point3::new(ox as f32 - r, oy as f32 - r, -h),
+            Point3::new(ox as f32 + r, oy as f32 + r, h),
+        );
+        let mut gone = self.tree.within_box(&near);
+        gone.retain(|p| sweep.sees_past([f64::from(p.x), f64::from(p.y)], margin));
+        for p in &gone {
+            let k = self.key(p);
+            self.seen.remove(&k);
+        }
+        let removed = self.tree.delete_points(&gone);
+        self.stats.points_cleared += removed as u64;
+        self.stats.points = self.tree.len();
+        removed
+    }
+
+    /// Deletes voxel `k`'s points. The box is widened by two ulps each way: a point's key is `floor(p / v)` in
+    /// f32, and `k * v` rounded may land a hair past a point on the voxel's edge (3.6 m at 5 cm: key 71, box
+    /// up to 3.5999998), which would then never expire.
+    fn delete_voxel(&mut self, k: VoxelKey) -> usize {
+        self.seen.remove(&k);
+        let v = f64::from(self.params.voxel_m);
+        let lo = |i: i32| ((f64::from(i) * v) as f32).next_down().next_down();
+        let hi = |i: i32| ((f64::from(i + 1) * v) as f32).next_up().next_up();
+        let min = Point3::new(lo(k.0), lo(k.1), lo(k.2));
+        let max = Point3::new(hi(k.0), hi(k.1), hi(k.2));
+        self.tree.delete_box(&Aabb::new(min, max))
+    }
+
     /// Deletes voxels not re-observed within the horizon; returns how many points went.
     pub fn expire(&mut self, now_ms: u64) -> usize {
         let horizon = self.params.horizon_ms;
@@ -207,13 +255,9 @@ impl LiveMap {
             .filter(|&(_, &t)| now_ms.saturating_sub(t) > horizon)
             .map(|(&k, _)| k)
             .collect();
-        let v = self.params.voxel_m;
         let mut removed = 0;
         for k in stale {
-            self.seen.remove(&k);
-            let min = Point3::new(k.0 as f32 * v, k.1 as f32 * v, k.2 as f32 * v);
-            let max = Point3::new(min.x + v, min.y + v, min.z + v);
-            removed += self.tree.delete_box(&Aabb::new(min, max));
+            removed += self.delete_voxel(k);
         }
         self.stats.points_expired += removed as u64;
         self.stats.points = self.tree.len();
@@ -307,5 +351,99 @@ mod tests {
         assert_eq!(m.tree().len(), 1);
         let near = m.tree().nearest(&Point3::new(5.0, 5.0, 0.5), 1);
         assert_eq!(near.len(), 1);
+    }
+
+    #[test]
+    fn a_scan_clears_the_trail_it_sees_through_and_keeps_what_it_hits() {
+        let mut m = map();
+        // A walker's trail across an aisle at x = 5 (scan points, z = 0), and a box seen by a 3-D cloud.
+        let trail: Vec<[f64; 3]> = (0..20).map(|i| [5.0, 2.0 + f64::from(i) * 0.1, 0.0]).collect();
+        m.ingest(&trail, true, 1);
+        m.ingest(&[[5.0, 3.0, 0.5]], false, 1);
+        let before = m.tree().len();
+        assert_eq!(before, 21);
+        // A laser at (2, 3) looking along +x over ±30°, every ray returning at 6 m (the far wall at x = 8),
+        // except the one along +x, which returns at 3 m: the walker standing at (5, 3) now.
+        let rays = 61;
+        let mut ranges = vec![6.0_f32; rays];
+        ranges[30] = 3.0;
+        let scan = shift_proto::ros::LaserScan {
+            angle_min: -30f32.to_radians(),
+            angle_max: 30f32.to_radians(),
+            angle_increment: 1f32.to_radians(),
+            range_min: 0.1,
+            range_max: 10.0,
+            ranges,
+            ..shift_proto::ros::LaserScan::default()
+        };
+        let pose = crate::robots::Pose2 {
+            x: 2.0,
+            y: 3.0,
+            yaw: 0.0,
+            stamp_ns: 0,
+        };
+        let sweep = Sweep::of_scan(&scan, pose, crate::sensors::geometry::SensorOffset::default()).expect("usable");
+        let cleared = m.clear_through(&sweep);
+        // Kept: the 3-D point, the walker's own return (its ray stopped there) and the trail points next to it
+        // whose neighbouring ray is the short one.
+        let kept = m.tree().flatten();
+        assert!(kept.iter().any(|p| p.z == 0.5), "cloud points are left to the horizon");
+        assert!(
+            kept.iter().any(|p| (p.y - 3.0).abs() < 0.01 && p.z == 0.0),
+            "the walker now: {kept:?}"
+        );
+        assert!(
+            kept.iter().all(|p| p.z != 0.0 || (p.y - 3.0).abs() < 0.1),
+            "the trail went: {kept:?}"
+        );
+        assert_eq!(cleared, before - kept.len());
+        assert_eq!(m.stats().points_cleared, cleared as u64);
+        // The horizon does not count what was cleared, and a cleared voxel can come back.
+        assert_eq!(m.expire(5000), kept.len());
+        assert_eq!(m.ingest(&trail[..1], true, 6000).inserted, 1);
+    }
+
+    #[test]
+    fn points_on_a_voxel_edge_expire() {
+        let mut m = map();
+        // 3.6 / 0.05 is 71.99999 in f32: the point's voxel is 71, whose far edge rounds to 3.5999998.
+        m.ingest(&[[5.0, 3.6, 0.0], [1.0, 0.15, 0.0], [2.0, 2.0, 0.0]], true, 0);
+        assert_eq!(m.tree().len(), 3);
+        assert_eq!(m.expire(5000), 3);
+        assert!(m.tree().is_empty());
+    }
+
+    #[test]
+    fn no_clearing_with_a_zero_margin() {
+        let mut m = LiveMap::new(
+            LiveMapParams {
+                clear_margin_m: 0.0,
+                ..LiveMapParams::default()
+            },
+            0.0,
+            0.0,
+            10.0,
+            10.0,
+        )
+        .expect("valid params");
+        m.ingest(&[[5.0, 3.0, 0.0]], true, 1);
+        let scan = shift_proto::ros::LaserScan {
+            angle_min: -0.1,
+            angle_max: 0.1,
+            angle_increment: 0.1,
+            range_min: 0.1,
+            range_max: 10.0,
+            ranges: vec![6.0; 3],
+            ..shift_proto::ros::LaserScan::default()
+        };
+        let pose = crate::robots::Pose2 {
+            x: 2.0,
+            y: 3.0,
+            yaw: 0.0,
+            stamp_ns: 0,
+        };
+        let sweep = Sweep::of_scan(&scan, pose, crate::sensors::geometry::SensorOffset::default()).expect("usable");
+        assert_eq!(m.clear_through(&sweep), 0);
+        assert_eq!(m.tree().len(), 1);
     }
 }

@@ -67,6 +67,9 @@ pub struct RecordedEngineConfig {
     /// [`EngineConfig::blind_after_ms`](crate::EngineConfig::blind_after_ms) (absent: the default).
     #[serde(default)]
     pub blind_after_ms: Option<u64>,
+    /// [`EngineConfig::retain_plans`](crate::EngineConfig::retain_plans) (absent: every plan kept).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub retain_plans: Option<usize>,
     /// Recording format ([`FORMAT`]; absent in format 1).
     #[serde(default = "format_one")]
     pub format: u32,
@@ -87,6 +90,7 @@ impl RecordedEngineConfig {
             default_site: self.default_site.clone(),
             blind_after_ms: self.blind_after_ms.unwrap_or(defaults.blind_after_ms),
             progress: defaults.progress,
+            retain_plans: self.retain_plans.unwrap_or(defaults.retain_plans),
         }
     }
 
@@ -99,6 +103,7 @@ impl RecordedEngineConfig {
             watch: config.watch,
             default_site: config.default_site.clone(),
             blind_after_ms: Some(config.blind_after_ms),
+            retain_plans: (config.retain_plans != usize::MAX).then_some(config.retain_plans),
             format: FORMAT,
         }
     }
@@ -111,6 +116,13 @@ pub enum Decision {
     /// The event was refused; nothing changed.
     Refused {
         /// The engine's error message.
+        error: String,
+    },
+    /// A client's request ([`Event::is_request`](crate::Event::is_request)) whose decisions the store could not
+    /// commit: the engine was put back as it was before the request, and the request refused. A replay does
+    /// the same (handles it on a snapshot and puts the snapshot back).
+    Undone {
+        /// Why the store refused.
         error: String,
     },
     /// [`Command::StoreSite`]: a site is persisted.
@@ -202,6 +214,11 @@ pub enum Decision {
         plan_id: String,
         /// Version it produces.
         version: u64,
+    },
+    /// [`Command::ForgetPlan`]: a settled plan beyond `retain_plans` is forgotten.
+    ForgetPlan {
+        /// Plan.
+        plan_id: String,
     },
     /// [`Command::FeedSite`]: where a robot's sensor data goes.
     FeedSite {
@@ -299,6 +316,9 @@ impl From<&Command> for Decision {
             Command::FeedSite { robot, site } => Self::FeedSite {
                 robot: robot.clone(),
                 site: site.clone(),
+            },
+            Command::ForgetPlan { plan_id } => Self::ForgetPlan {
+                plan_id: plan_id.clone(),
             },
         }
     }

@@ -52,10 +52,13 @@ pub struct WatchState {
     pub pending: bool,
     /// Last check started, milliseconds since the Unix epoch (0 = never).
     pub last_check_ms: u64,
+    /// Since when checks have proposed to end the plan at a blockage, milliseconds (see
+    /// [`crate::watch::WatchParams::end_hold_s`]).
+    pub end_proposed_since_ms: Option<u64>,
 }
 
 /// Every robot seen, by id.
-#[derive(Debug, Default)]
+#[derive(Debug, Default, Clone)]
 pub struct Robots {
     robots: BTreeMap<String, Robot>,
 }

@@ -34,6 +34,11 @@ pub struct WatchParams {
     pub max_curvature_per_m: f64,
     /// Pose updates trigger a check at most this often, milliseconds (map changes near the robot always do).
     pub check_interval_ms: u64,
+    /// A correction that would end the plan where the robot stands (a blockage with nothing beyond it
+    /// reachable: the skip without a rejoin point) is sent only once the blockage has stood this long, seconds.
+    /// A person standing in an aisle walks on; a wall stays. Meanwhile the robot's own safety layer holds it,
+    /// and each check of its path (at its odometry, at most every `check_interval_ms`) looks again. 0 = at once.
+    pub end_hold_s: f64,
 }
 
 impl Default for WatchParams {
@@ -45,6 +50,7 @@ impl Default for WatchParams {
             j_threshold: None,
             max_curvature_per_m: 0.0,
             check_interval_ms: 200,
+            end_hold_s: 10.0,
         }
     }
 }

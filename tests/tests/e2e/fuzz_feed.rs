@@ -8,11 +8,13 @@ use shift_engine::sensors::geometry::{SensorOffset, scan_to_map};
 use shift_planner::geom::Point2;
 use shift_planner::map::json_grid::JsonGrid;
 use shift_planner::map::{CellState, GridGeometry, OccupancyGrid, load_ros_map};
+use shift_proto::keys::{KeySpace, Ros2Mapping};
 use shift_proto::ros::laser_scan::decode_laser_scan;
 use shift_proto::ros::odometry::{decode_odom_payload, decode_odometry};
 use shift_proto::ros::path::decode_path;
 use shift_proto::ros::point_cloud2::{decode_cloud_xyz, decode_point_cloud2};
 use shift_proto::{CorrectionDoc, PlanDocument, PlanMetricsDoc, PlanRequest, WaypointDoc, WaypointKindDoc};
+use shiftd::replay::{Action, KeyMap, Recorded, into_engine};
 
 /// A target's body: one input, any bytes.
 pub type Feed = fn(&[u8]);
@@ -27,6 +29,7 @@ pub const TARGETS: &[(&str, Feed)] = &[
     ("map_json_grid", map_json_grid),
     ("plan_request", plan_request),
     ("correction_json", correction_json),
+    ("mcap_replay", mcap_replay),
 ];
 
 /// sensor_msgs/PointCloud2 as a whole and as the ingest's xyz view.
@@ -118,4 +121,35 @@ pub fn correction_json(data: &[u8]) {
         metrics: PlanMetricsDoc::default(),
     };
     let _ = correction.apply(&doc);
+}
+
+/// An MCAP recording (shiftd's own or a ROS 2 bag) read as `shiftd replay` reads a file, then what both replays
+/// do with it short of Zenoh: its engine inputs through a fresh engine checked against its recorded decisions
+/// (`--into-engine --check`), and its ingested topics mapped to the keys of every `[zenoh] mapping`.
+pub fn mcap_replay(data: &[u8]) {
+    let mut rec = Recorded::default();
+    if rec.read_bytes(data, "fuzz input").is_err() {
+        return;
+    }
+    rec.ingest.sort_by_key(|(t, _)| *t);
+    let _ = into_engine(&rec, &mut std::io::sink(), true);
+    if rec.ingest.is_empty() {
+        return;
+    }
+    let Ok(keys) = KeySpace::new("shift", "default") else {
+        return;
+    };
+    let mappings = [
+        Ros2Mapping::Native,
+        Ros2Mapping::BridgeRos2dds { namespace: None },
+        Ros2Mapping::RmwZenoh { domain: 0 },
+    ];
+    for mapping in mappings {
+        let map = KeyMap::new(keys.clone(), mapping);
+        for (_, action) in &rec.ingest {
+            if let Action::Put { key, kind, .. } = action {
+                let _ = map.key_for(key, *kind);
+            }
+        }
+    }
 }

@@ -98,4 +98,200 @@ fn write_fuzz_seeds() {
         std::fs::create_dir_all(&dir).expect("seed dir");
         std::fs::write(dir.join("seed-0"), bytes).expect("seed");
     }
+    // mcap_replay: one recording twice, plain (seed-0: no chunks, compression or CRCs, so mutations reach the
+    // messages) and as the daemon's writer makes it (seed-1: zstd chunks, summary).
+    let messages = mcap_replay_messages(&header, &scan, &odom);
+    let dir = root.join("mcap_replay");
+    std::fs::create_dir_all(&dir).expect("seed dir");
+    std::fs::write(dir.join("seed-0"), plain_mcap(&messages)).expect("seed");
+    let tmp = tempfile::tempdir().expect("tmp");
+    let mut files = shiftd::record::writer::RotatingWriter::new(shiftd::record::writer::FileSettings {
+        dir: tmp.path().to_path_buf(),
+        run: 1,
+        max_file_bytes: 0,
+        max_file_age: std::time::Duration::ZERO,
+        chunk_bytes: 4096,
+    });
+    for (kind, topic, log_ns, data) in &messages {
+        files.write(*kind, topic, *log_ns, data).expect("record");
+    }
+    let file = files.finish().expect("finish").expect("a file");
+    std::fs::copy(file, dir.join("seed-1")).expect("seed");
+}
+
+/// A short recording as `shiftd serve --record` makes one, with a ROS 2 bag's topics among the ingest: the
+/// engine's sizes; a map upload, a robot's liveliness and pose and a plan request, each with the decisions a
+/// fresh engine made for it; the robot's liveliness token and odometry (CDR and JSON) on SHIFT keys; a scan and
+/// a cloud on ROS 2 topics. (kind, topic, log time ns, payload), in log-time order.
+fn mcap_replay_messages(
+    header: &shift_proto::ros::Header,
+    scan: &shift_proto::ros::laser_scan::LaserScan,
+    odom: &shift_proto::ros::odometry::Odometry,
+) -> Vec<(shiftd::record::channels::Kind, String, u64, Vec<u8>)> {
+    use shift_engine::recorded::{RecordedDecisions, RecordedEngineConfig, RecordedInput, decisions_of};
+    use shift_engine::{Engine, EngineConfig, Event, LoadedSite, MapSource, Pose2, SiteRecord};
+    use shift_proto::ros::laser_scan::encode_laser_scan;
+    use shift_proto::ros::odometry::encode_odometry;
+    use shift_proto::ros::point_cloud2::encode_point_cloud2_xyz;
+    use shiftd::record::channels::{self, Kind};
+
+    let run = 1_796_290_080_000u64;
+    let json = |v: serde_json::Value| serde_json::to_vec(&v).expect("json");
+    let config = EngineConfig::default();
+    let mut out = vec![(
+        Kind::EngineConfig,
+        channels::ENGINE_CONFIG.to_owned(),
+        run * 1_000_000,
+        serde_json::to_vec(&RecordedEngineConfig::of(run, &config)).expect("json"),
+    )];
+    let cells = [0; 100].map(|c: i32| c.to_string()).join(", ");
+    let site = LoadedSite::parse(SiteRecord {
+        site: "demo".into(),
+        source: MapSource::Json {
+            text: format!(
+                r#"{{"width": 10, "height": 10, "resolution": 0.2, "origin": [0.0, 0.0], "cells": [{cells}]}}"#
+            ),
+        },
+        updated_ms: run,
+    })
+    .expect("site");
+    let request = serde_json::from_value(serde_json::json!({"site": "demo", "start": [0.5, 0.5],
+        "robot": {"radius": 0.15, "tool_width": 0.3}, "region": [[0.2, 0.2], [1.8, 0.2], [1.8, 1.8], [0.2, 1.8]],
+        "objective": "time", "snap_start_m": 0.5}))
+    .expect("request");
+    let pose = Pose2 {
+        x: 0.5,
+        y: 0.5,
+        yaw: 0.0,
+        stamp_ns: (run as i64 + 300) * 1_000_000,
+    };
+    let events = vec![
+        Event::MapUploaded { site },
+        Event::RobotLiveliness {
+            robot: "r1".into(),
+            alive: true,
+        },
+        Event::RobotPose {
+            robot: "r1".into(),
+            pose,
+        },
+        Event::PlanRequested { request },
+    ];
+    let mut engine = Engine::new(config);
+    for (seq, event) in (1u64..).zip(events) {
+        let now_ms = run + seq * 100;
+        let input = RecordedInput {
+            run,
+            seq,
+            now_ms,
+            event: event.clone(),
+        };
+        let decisions = RecordedDecisions {
+            run,
+            seq,
+            now_ms,
+            decisions: decisions_of(&engine.handle(event, now_ms)),
+        };
+        let log_ns = now_ms * 1_000_000;
+        for (kind, topic, bytes) in [
+            (Kind::EngineInput, channels::ENGINE_INPUT, serde_json::to_vec(&input)),
+            (
+                Kind::EngineDecisions,
+                channels::ENGINE_DECISIONS,
+                serde_json::to_vec(&decisions),
+            ),
+        ] {
+            out.push((kind, topic.to_owned(), log_ns, bytes.expect("json")));
+        }
+    }
+    let alive = |alive: bool| json(serde_json::json!({"key": "shift/default/robots/r1/alive", "alive": alive}));
+    let ingest = [
+        (Kind::Liveliness, channels::LIVELINESS, alive(true)),
+        (Kind::Odometry, "shift/default/robots/r1/odom", encode_odometry(odom)),
+        (
+            Kind::OdomJson,
+            "shift/default/robots/r2/odom",
+            json(serde_json::json!({"x": 1.0, "y": 2.0, "yaw": 0.5})),
+        ),
+        (Kind::LaserScan, "/robot1/scan", encode_laser_scan(scan)),
+        (
+            Kind::PointCloud2,
+            "/fleet_a/robot1/points",
+            encode_point_cloud2_xyz(header, &[[1.0, 2.0, 0.5]]),
+        ),
+        (Kind::Liveliness, channels::LIVELINESS, alive(false)),
+    ];
+    let t = (run + 1000) * 1_000_000;
+    out.extend(
+        (t..)
+            .zip(ingest)
+            .map(|(log_ns, (kind, topic, data))| (kind, topic.to_owned(), log_ns, data)),
+    );
+    out
+}
+
+/// An MCAP file of `messages` without chunks, compression, CRCs or summary: the header, each schema and channel
+/// before its first message, the messages, data end and footer. Schema texts are left empty (a replay goes by
+/// the schema's name) to keep the seed small.
+fn plain_mcap(messages: &[(shiftd::record::channels::Kind, String, u64, Vec<u8>)]) -> Vec<u8> {
+    const MAGIC: &[u8] = b"\x89MCAP0\r\n";
+    fn record(out: &mut Vec<u8>, opcode: u8, body: &[u8]) {
+        out.push(opcode);
+        out.extend((body.len() as u64).to_le_bytes());
+        out.extend(body);
+    }
+    /// A string, byte array or map: u32 length, then the bytes.
+    fn prefixed(out: &mut Vec<u8>, bytes: &[u8]) {
+        out.extend((bytes.len() as u32).to_le_bytes());
+        out.extend(bytes);
+    }
+    let mut out = MAGIC.to_vec();
+    let mut body = Vec::new();
+    prefixed(&mut body, b"ros2");
+    prefixed(&mut body, b"shift fuzz seed");
+    record(&mut out, 0x01, &body);
+    let (mut schemas, mut channels) = (Vec::new(), Vec::new());
+    for (sequence, (kind, topic, log_ns, data)) in (0u32..).zip(messages) {
+        let schema_id = match schemas.iter().position(|k| k == kind) {
+            Some(i) => i as u16 + 1,
+            None => {
+                schemas.push(*kind);
+                let id = schemas.len() as u16;
+                let mut body = id.to_le_bytes().to_vec();
+                prefixed(&mut body, kind.schema().name.as_bytes());
+                prefixed(&mut body, kind.schema().encoding.as_bytes());
+                prefixed(&mut body, b"");
+                record(&mut out, 0x03, &body);
+                id
+            }
+        };
+        let channel_id = match channels.iter().position(|c| c == &(*kind, topic)) {
+            Some(i) => i as u16 + 1,
+            None => {
+                channels.push((*kind, topic));
+                let id = channels.len() as u16;
+                let mut body = [id.to_le_bytes(), schema_id.to_le_bytes()].concat();
+                prefixed(&mut body, topic.as_bytes());
+                prefixed(&mut body, kind.message_encoding().as_bytes());
+                let mut metadata = Vec::new();
+                for (k, v) in kind.metadata() {
+                    prefixed(&mut metadata, k.as_bytes());
+                    prefixed(&mut metadata, v.as_bytes());
+                }
+                prefixed(&mut body, &metadata);
+                record(&mut out, 0x04, &body);
+                id
+            }
+        };
+        let mut body = channel_id.to_le_bytes().to_vec();
+        body.extend(sequence.to_le_bytes());
+        body.extend(log_ns.to_le_bytes());
+        body.extend(log_ns.to_le_bytes());
+        body.extend(data);
+        record(&mut out, 0x05, &body);
+    }
+    record(&mut out, 0x0f, &0u32.to_le_bytes());
+    record(&mut out, 0x02, &[0; 20]);
+    out.extend(MAGIC);
+    out
 }

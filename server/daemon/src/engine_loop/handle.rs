@@ -23,9 +23,9 @@ pub enum LoopError {
     /// The engine refused it.
     #[error(transparent)]
     Engine(#[from] EngineError),
-    /// The store could not commit it: nothing is acknowledged.
+    /// The store could not commit it (or is failing): nothing of it is stored, served or published.
     #[error("store: {0}")]
-    Store(String),
+    Store(crate::store::fault::StoreError),
     /// The engine loop has stopped.
     #[error("the engine has stopped")]
     Stopped,

@@ -1,8 +1,10 @@
 //! The engine loop: one thread that owns the [`Engine`], the [`Store`] and the job and check runners; takes
 //! events from a bounded channel ([`handle`]: the one way in), persists what the engine says to persist *before*
-//! answering, updates the read model, starts and cancels jobs and checks, routes robots' sensor data, publishes
-//! plan events (SSE, and on Zenoh through the [`Publisher`]).
+//! answering (an event's writes in one transaction), updates the read model, starts and cancels jobs and checks,
+//! routes robots' sensor data, publishes plan events (SSE, and on Zenoh through the [`Publisher`]). When the
+//! store cannot write, [`durability`] says what is undone, what waits and what runs.
 
+pub mod durability;
 pub mod handle;
 
 use std::sync::{Arc, Mutex};
@@ -12,12 +14,14 @@ use shift_engine::{Command, Engine, Event, LiveMaps};
 use shift_proto::PlanEvent;
 use tokio::sync::{broadcast, mpsc, watch};
 
+use self::durability::Durability;
 use self::handle::{EngineHandle, INBOX, LoopError, Msg, Reply};
 use crate::clock::SharedClock;
 use crate::fleet::publish::Publisher;
 use crate::jobs::JobRunner;
+use crate::pools::Pools;
 use crate::record::Recorder;
-use crate::store::Store;
+use crate::store::{Store, Write};
 use crate::views::Views;
 use crate::watch::CheckRunner;
 
@@ -37,8 +41,8 @@ pub struct LoopParts {
     pub overlay: bool,
     /// The fleet's sensor pipeline: the loop routes robots' data to their plan's site.
     pub sensors: Arc<Mutex<SensorHub>>,
-    /// The runtime whose blocking pool runs plan jobs and path checks.
-    pub runtime: tokio::runtime::Handle,
+    /// The threads that run plan jobs and path checks.
+    pub pools: Pools,
     /// MCAP recording of the engine's inputs and decisions.
     pub recorder: Option<Recorder>,
     /// The time every event is handled at.
@@ -50,15 +54,16 @@ pub fn spawn(engine: Engine, parts: LoopParts) -> std::io::Result<(EngineHandle,
     let (tx, rx) = mpsc::channel(INBOX);
     let (running_tx, running_rx) = watch::channel(0);
     let handle = EngineHandle::new(tx, running_rx);
-    let checks = CheckRunner::new(parts.runtime.clone(), handle.clone(), parts.live.clone());
+    let checks = CheckRunner::new(parts.pools.checks.clone(), handle.clone(), parts.live.clone());
     let overlay = parts.overlay.then(|| parts.live.clone());
-    let jobs = JobRunner::new(parts.runtime.clone(), handle.clone(), overlay);
+    let jobs = JobRunner::new(parts.pools.plans.clone(), handle.clone(), overlay);
     let engine_loop = EngineLoop {
         engine,
         parts,
         jobs,
         checks,
         running: running_tx,
+        durability: Durability::default(),
     };
     let thread = std::thread::Builder::new()
         .name("engine".into())
@@ -72,6 +77,7 @@ struct EngineLoop {
     jobs: JobRunner,
     checks: CheckRunner,
     running: watch::Sender<usize>,
+    durability: Durability,
 }
 
 impl EngineLoop {
@@ -85,15 +91,7 @@ impl EngineLoop {
                         Event::JobFinished { plan_id, .. } => Some(plan_id.clone()),
                         _ => None,
                     };
-                    let now = self.parts.clock.now_ms();
-                    // MCAP recording of the engine's inputs and decisions (no-op without a recorder).
-                    let recorder = self.parts.recorder.as_ref();
-                    let seq = recorder.map_or(0, |r| r.engine_input(&event, now));
-                    let handled = self.engine.handle(*event, now);
-                    if let Some(r) = recorder {
-                        r.engine_output(seq, now, &handled);
-                    }
-                    let result = handled.map_err(LoopError::from).and_then(|cmds| self.execute(cmds));
+                    let result = self.on_event(*event);
                     if let Some(id) = finished {
                         self.jobs.finished(&id);
                     }
@@ -110,29 +108,96 @@ impl EngineLoop {
         }
     }
 
-    /// Carries out commands in order. A failed store write stops the rest: nothing after it is acknowledged.
-    fn execute(&mut self, cmds: Vec<Command>) -> Result<Reply, LoopError> {
-        let mut reply = Reply::default();
-        let store_err = |e: crate::error::DaemonError| {
-            tracing::error!("store write failed: {e}");
-            LoopError::Store(e.to_string())
+    /// Handles one event: the engine decides, the store commits the event's writes in one transaction, then
+    /// the rest is carried out. See [`durability`] for a store that cannot write.
+    fn on_event(&mut self, event: Event) -> Result<Reply, LoopError> {
+        let now = self.parts.clock.now_ms();
+        if self.durability.fault().is_some() {
+            let (store, views) = (self.parts.store.clone(), self.parts.views.clone());
+            let mut waited = Vec::new();
+            if self.durability.retry(&store, now, |batch| waited.push(batch)) {
+                views.set_store_fault(None);
+            }
+            for batch in waited {
+                self.execute(batch);
+            }
+        }
+        let request = event.is_request();
+        if request && let Some(fault) = self.durability.fault() {
+            return Err(LoopError::Store(fault.clone()));
+        }
+        let snapshot = request.then(|| self.engine.clone());
+        // MCAP recording of the engine's inputs and decisions (no-op without a recorder).
+        let recorder = self.parts.recorder.clone();
+        let seq = recorder.as_ref().map_or(0, |r| r.engine_input(&event, now));
+        let cmds = match self.engine.handle(event, now) {
+            Ok(cmds) => cmds,
+            Err(e) => {
+                if let Some(r) = &recorder {
+                    r.engine_output(seq, now, &Err(e.clone()));
+                }
+                return Err(e.into());
+            }
         };
+        let committed = if !request && self.durability.must_wait() {
+            Err(None)
+        } else {
+            let writes: Vec<Write<'_>> = cmds.iter().filter_map(Write::of).collect();
+            match writes.is_empty() {
+                true => Ok(()),
+                false => self.parts.store.commit(&writes).map_err(Some),
+            }
+        };
+        match (committed, snapshot) {
+            (Err(Some(e)), Some(snapshot)) => {
+                // A request whose writes did not commit: as if it never reached the engine.
+                self.engine = snapshot;
+                if let Some(r) = &recorder {
+                    r.engine_undone(seq, now, &e.to_string());
+                }
+                self.durability.failed(&e, now);
+                self.parts.views.set_store_fault(Some(e.clone()));
+                Err(LoopError::Store(e))
+            }
+            (Ok(()), _) => {
+                if let Some(r) = &recorder {
+                    r.engine_output(seq, now, &Ok(cmds.clone()));
+                }
+                Ok(self.execute(cmds))
+            }
+            (Err(e), _) => {
+                // A fact: the engine's decision stands; its durable part waits for the store.
+                if let Some(r) = &recorder {
+                    r.engine_output(seq, now, &Ok(cmds.clone()));
+                }
+                if let Some(e) = e {
+                    self.durability.failed(&e, now);
+                    self.parts.views.set_store_fault(Some(e));
+                }
+                let (run_now, later) = durability::split_durable(cmds);
+                self.durability.defer(later);
+                Ok(self.execute(run_now))
+            }
+        }
+    }
+
+    /// Carries out commands in order, once their writes are committed (the store commands update the views).
+    fn execute(&mut self, cmds: Vec<Command>) -> Reply {
+        let mut reply = Reply::default();
         let p = &self.parts;
         for cmd in cmds {
             match cmd {
-                Command::StoreSite(rec) => p.store.put_site(&rec).map_err(store_err)?,
+                Command::StoreSite(_) => {}
                 Command::SiteChanged(summary) => {
                     p.views.set_site(summary.clone());
                     reply.sites.push(summary);
                 }
                 Command::StorePlan(rec) => {
-                    p.store.put_plan(&rec).map_err(store_err)?;
                     p.views.set_record(rec.clone());
                     reply.plans.push(rec);
                 }
                 Command::UpdatePlan(rec) => p.views.set_record(rec),
                 Command::StoreResult { plan_id, doc } => {
-                    p.store.put_result(&plan_id, &doc).map_err(store_err)?;
                     p.views.set_doc(&plan_id, doc);
                 }
                 Command::StartJob(job) => self.jobs.start(job),
@@ -142,17 +207,13 @@ impl EngineLoop {
                     None => tracing::warn!(robot, "zenoh is disabled: the plan is only served over HTTP"),
                 },
                 Command::RobotChanged(view) => p.views.set_robot(view),
+                Command::ForgetPlan { plan_id } => p.views.forget_plan(&plan_id),
                 Command::SiteStatic { site, clearance, grid } => {
                     p.views.set_site_map(&site, grid);
                     p.live.set_static(&site, clearance);
                 }
                 Command::StartCheck(job) => self.checks.start(*job),
-                Command::StoreCorrection {
-                    record,
-                    correction,
-                    doc,
-                } => {
-                    p.store.put_correction(&record, &correction).map_err(store_err)?;
+                Command::StoreCorrection { record, doc, .. } => {
                     p.views.set_doc(&record.plan_id, doc);
                     p.views.set_record(record.clone());
                     reply.plans.push(record);
@@ -183,7 +244,7 @@ impl EngineLoop {
                 }
             }
         }
-        Ok(reply)
+        reply
     }
 
     fn export_gauges(&mut self) {
@@ -192,6 +253,8 @@ impl EngineLoop {
         }
         metrics::gauge!("shift_plan_queue_depth").set(self.engine.queue_depth() as f64);
         metrics::gauge!("shift_plan_jobs_running").set(self.engine.running() as f64);
+        metrics::gauge!("shift_store_ok").set(if self.durability.fault().is_none() { 1.0 } else { 0.0 });
+        metrics::gauge!("shift_store_deferred").set(self.durability.deferred() as f64);
         let running = self.engine.running();
         self.running.send_if_modified(|r| {
             let changed = *r != running;

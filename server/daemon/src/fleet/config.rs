@@ -52,6 +52,9 @@ pub struct ZenohConfig {
     /// Points this close to an obstacle of the static map are that obstacle seen again, not new ones
     /// (metres; 0 keeps them all).
     pub known_tolerance_m: f64,
+    /// A LaserScan clears the scan points of the live map its rays saw through by more than this (a walker's
+    /// trail; metres; 0 = no clearing, points leave only by the horizon).
+    pub clear_margin_m: f64,
     /// How this fleet's robots name their keys: `{kind = "native"}` (DESIGN §5.4 under prefix/fleet),
     /// `{kind = "bridge_ros2dds", namespace = "…"}` or `{kind = "rmw_zenoh", domain = 0}`.
     pub mapping: Ros2Mapping,
@@ -93,6 +96,7 @@ impl Default for ZenohConfig {
             horizon_s: 600,
             cloud_queue: 4,
             known_tolerance_m: 0.1,
+            clear_margin_m: 0.1,
             mapping: Ros2Mapping::Native,
             robot_timeout_s: 10,
             pose_history_s: 5.0,

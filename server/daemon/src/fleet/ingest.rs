@@ -337,6 +337,10 @@ impl Ingest {
         };
         let (report, points_in_map) = match live.map.write() {
             Ok(mut map) => {
+                // What the scan saw through first: its own returns are never cleared by it.
+                if let Some(sweep) = &p.sweep {
+                    map.clear_through(sweep);
+                }
                 let r = map.ingest(&p.points, p.planar, now);
                 // Forget what was not seen again within the horizon, at most every few seconds.
                 if now.saturating_sub(live.last_expire_ms.load(Ordering::Relaxed)) >= EXPIRE_EVERY_MS {

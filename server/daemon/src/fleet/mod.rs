@@ -106,6 +106,7 @@ impl Fleet {
             max_points: config.max_points,
             horizon_ms: config.horizon_s.saturating_mul(1000),
             known_tolerance_m: config.known_tolerance_m as f32,
+            clear_margin_m: config.clear_margin_m as f32,
         };
         let ingest = Arc::new(Ingest::new(
             config.cloud_queue,

@@ -108,11 +108,25 @@ impl From<EngineError> for ApiError {
     }
 }
 
+use crate::store::fault::FaultKind;
+
 impl From<LoopError> for ApiError {
     fn from(e: LoopError) -> Self {
         match e {
             LoopError::Engine(e) => e.into(),
-            LoopError::Store(m) => Self::new(StatusCode::INTERNAL_SERVER_ERROR, "store", m),
+            LoopError::Store(e) => {
+                let (status, code) = match e.kind {
+                    FaultKind::Full => (StatusCode::INSUFFICIENT_STORAGE, "store_full"),
+                    FaultKind::ReadOnly => (StatusCode::SERVICE_UNAVAILABLE, "store_read_only"),
+                    FaultKind::Io => (StatusCode::SERVICE_UNAVAILABLE, "store_unavailable"),
+                    FaultKind::Data => (StatusCode::INTERNAL_SERVER_ERROR, "store"),
+                };
+                Self::new(
+                    status,
+                    code,
+                    format!("{e}; nothing of this request was stored, reads are still served"),
+                )
+            }
             LoopError::Stopped => Self::new(StatusCode::SERVICE_UNAVAILABLE, "shutting_down", e.to_string()),
         }
     }

@@ -16,12 +16,19 @@ pub async fn healthz() -> impl IntoResponse {
     axum::Json(json!({"status": "ok"}))
 }
 
-/// Readiness: the store is open and the engine thread runs.
+/// Readiness: the engine thread runs. `store` is `open`, or why writes are refused now (`full`, `read_only`,
+/// `io`, `data`, with `store_error`): reads are still served then, so the daemon stays ready.
 #[utoipa::path(get, path = "/readyz", tag = "ops",
     responses((status = 200, description = "ready"), (status = 503, description = "not ready")))]
 pub async fn readyz(State(state): State<AppState>) -> Response {
     if state.engine.is_alive() {
-        axum::Json(json!({"status": "ready", "store": "open", "engine": "running"})).into_response()
+        let body = match state.views.store_fault() {
+            None => json!({"status": "ready", "store": "open", "engine": "running"}),
+            Some(f) => {
+                json!({"status": "ready", "store": f.kind.as_str(), "store_error": f.message, "engine": "running"})
+            }
+        };
+        axum::Json(body).into_response()
     } else {
         (
             StatusCode::SERVICE_UNAVAILABLE,

@@ -234,6 +234,28 @@ impl Recorder {
     }
 }
 
+impl Recorder {
+    /// Records that input `seq`, a client's request, was undone: the store could not commit what it decided.
+    pub fn engine_undone(&self, seq: u64, now_ms: u64, error: &str) {
+        if let Ok(mut p) = self.shared.pending_sites.lock() {
+            p.clear();
+        }
+        self.send(
+            Entry::Output {
+                seq,
+                now_ms,
+                log_ns: now_ns(),
+                decisions: vec![Decision::Undone {
+                    error: error.to_owned(),
+                }],
+                docs: Vec::new(),
+                statuses: Vec::new(),
+            },
+            0,
+        );
+    }
+}
+
 /// A running recording: the writer thread and the Zenoh taps.
 pub struct Recording {
     recorder: Recorder,

@@ -45,6 +45,18 @@ pub async fn http(port: u16, method: &str, path: &str, body: Option<&Value>) -> 
     Ok((status, json))
 }
 
+/// `GET path` as text (`/metrics`).
+pub async fn text(port: u16, path: &str) -> Result<String> {
+    let mut s = tokio::net::TcpStream::connect(("127.0.0.1", port)).await?;
+    let req = format!("GET {path} HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n");
+    s.write_all(req.as_bytes()).await?;
+    let mut raw = Vec::new();
+    s.read_to_end(&mut raw).await?;
+    let text = String::from_utf8_lossy(&raw);
+    let (_, body) = text.split_once("\r\n\r\n").context("HTTP response")?;
+    Ok(body.to_owned())
+}
+
 /// A `shiftd serve` process with its data under `dir/data`.
 pub struct Daemon {
     child: Child,
@@ -55,9 +67,31 @@ pub struct Daemon {
 impl Daemon {
     /// Starts shiftd with the TOML `config` and waits until `/readyz` answers 200.
     pub async fn start(dir: &Path, port: u16, endpoint: &str, config: &str) -> Result<Self> {
+        Self::start_wrapped(dir, &dir.join("data"), port, endpoint, config, &[]).await
+    }
+
+    /// Starts shiftd on `data_dir` as the last arguments of the command `wrapper` (empty: shiftd itself; e.g.
+    /// `unshare … sh -c '… exec "$@"'` to give it a mount of its own), its config in `dir/shiftd.toml`.
+    pub async fn start_wrapped(
+        dir: &Path,
+        data_dir: &Path,
+        port: u16,
+        endpoint: &str,
+        config: &str,
+        wrapper: &[String],
+    ) -> Result<Self> {
         let config_path = dir.join("shiftd.toml");
         std::fs::write(&config_path, config)?;
-        let child = Command::new(env!("CARGO_BIN_EXE_shiftd"))
+        let shiftd = env!("CARGO_BIN_EXE_shiftd");
+        let mut command = match wrapper.split_first() {
+            Some((program, args)) => {
+                let mut c = Command::new(program);
+                c.args(args).arg(shiftd);
+                c
+            }
+            None => Command::new(shiftd),
+        };
+        let child = command
             .args([
                 "serve",
                 "--bind",
@@ -66,7 +100,7 @@ impl Daemon {
                 endpoint,
             ])
             .arg("--data-dir")
-            .arg(dir.join("data"))
+            .arg(data_dir)
             .arg("--config")
             .arg(&config_path)
             .stdout(Stdio::null())
@@ -94,6 +128,11 @@ impl Daemon {
     /// `POST path` with a JSON body.
     pub async fn post(&self, path: &str, body: &Value) -> Result<(u16, Value)> {
         http(self.port, "POST", path, Some(body)).await
+    }
+
+    /// The child's process id.
+    pub fn pid(&self) -> u32 {
+        self.child.id()
     }
 
     /// SIGKILL: no shutdown, no flush beyond what was committed.
@@ -232,4 +271,17 @@ pub fn stretch_after(w: &[WaypointDoc], from_m: f64, min_m: f64) -> Option<(f64,
         }
     }
     None
+}
+
+/// A free `side` × `side` JSON grid at 5 cm with 40 pillars placed by `seed` (different bytes per site).
+pub fn pillar_grid(side: usize, seed: usize) -> Value {
+    let mut cells = vec![0u8; side * side];
+    for k in 0..40 {
+        let (x, y) = (
+            (seed * 7 + k * 13) % (side - 4) + 2,
+            (seed * 11 + k * 29) % (side - 4) + 2,
+        );
+        cells[y * side + x] = 100;
+    }
+    serde_json::json!({"resolution": 0.05, "origin": [0.0, 0.0], "width": side, "height": side, "cells": cells})
 }

@@ -141,6 +141,21 @@ pub enum Event {
     Shutdown,
 }
 
+impl Event {
+    /// A client's request (an HTTP call waits for its answer): when the store cannot commit what it decided,
+    /// the request is undone and refused. Everything else is a fact the fleet already lived through; what it
+    /// decided stands, and its durable part waits for the store.
+    pub fn is_request(&self) -> bool {
+        matches!(
+            self,
+            Self::MapUploaded { .. }
+                | Self::PlanRequested { .. }
+                | Self::CancelRequested { .. }
+                | Self::AssignPlan { .. }
+        )
+    }
+}
+
 /// Something the daemon must do, in the order given.
 #[derive(Debug, Clone)]
 pub enum Command {
@@ -187,6 +202,12 @@ pub enum Command {
     },
     /// The read model's robot view changed.
     RobotChanged(RobotView),
+    /// Forget a settled plan beyond `retain_plans`: its record, document, corrections and history, in the store
+    /// and the read model.
+    ForgetPlan {
+        /// Plan id.
+        plan_id: String,
+    },
     /// Check this robot's path (off the engine thread, with the site's live map); answer with
     /// [`Event::CheckFinished`].
     StartCheck(Box<CheckJob>),

@@ -3,7 +3,9 @@
 
 use std::sync::Arc;
 
-use shift_proto::{CorrectionDoc, LastCorrection, PlanDocument, PlanEvent, PlanStatus, ProgressJump, WatchHealth};
+use shift_proto::{
+    CorrectionDoc, CorrectionReason, LastCorrection, PlanDocument, PlanEvent, PlanStatus, ProgressJump, WatchHealth,
+};
 
 use super::{Command, Engine};
 use crate::error::{EngineError, Result};
@@ -11,7 +13,7 @@ use crate::plan::MAX_JUMPS;
 use crate::progress::Advance;
 use crate::robots::{Assignment, Pose2};
 use crate::site::validate_name;
-use crate::watch::{CheckJob, CheckOutcome, PatchLimits, Trigger};
+use crate::watch::{CheckJob, CheckOutcome, PatchLimits, ProposedCorrection, Trigger};
 
 /// Motion shorter than this between two poses says nothing about the heading, metres.
 const MIN_MOTION_M: f64 = 0.05;
@@ -172,7 +174,7 @@ impl Engine {
     /// Robots' points reached `site`'s live map: plans watched there see again.
     pub(super) fn site_fed(&mut self, site: &str, now_ms: u64, out: &mut Vec<Command>) {
         let Some(s) = self.sites.get_mut(site) else { return };
-        s.last_fed_ms = now_ms;
+        Arc::make_mut(s).last_fed_ms = now_ms;
         let robots: Vec<String> = self
             .robots
             .iter()
@@ -301,8 +303,29 @@ impl Engine {
             .assignment
             .as_ref()
             .is_some_and(|a| a.plan_id == plan_id && a.doc.version == base_version);
-        match outcome {
+        let held = match &outcome {
             CheckOutcome::Correct(p) if current => {
+                let len = r.assignment.as_ref().map_or(0, |a| a.doc.waypoints.len());
+                if ends_plan(p, len) {
+                    let since = *r.watch.end_proposed_since_ms.get_or_insert(now_ms);
+                    let hold_ms = (self.config.watch.end_hold_s.max(0.0) * 1e3) as u64;
+                    now_ms.saturating_sub(since) < hold_ms
+                } else {
+                    r.watch.end_proposed_since_ms = None;
+                    false
+                }
+            }
+            CheckOutcome::Clear => {
+                r.watch.end_proposed_since_ms = None;
+                false
+            }
+            _ => false,
+        };
+        match outcome {
+            // Held: the blockage may walk on; the next check looks again.
+            CheckOutcome::Correct(_) if held => {}
+            CheckOutcome::Correct(p) if current => {
+                r.watch.end_proposed_since_ms = None;
                 let Some(a) = r.assignment.as_mut() else { return };
                 let Some(rec) = self.plans.get_mut(plan_id) else { return };
                 let correction = CorrectionDoc {
@@ -361,4 +384,10 @@ impl Engine {
             self.check(robot, Trigger::MapChange, now_ms, out);
         }
     }
+}
+
+/// A proposal that ends the plan where the robot is: a skip with nothing beyond the blockage to rejoin (the
+/// rest of the plan replaced by the anchor alone).
+fn ends_plan(p: &ProposedCorrection, len: usize) -> bool {
+    p.reason == CorrectionReason::Skipped && p.to == len && p.waypoints.len() <= 1
 }

@@ -55,7 +55,30 @@ impl Engine {
         out.push(Command::StorePlan(rec.clone()));
         out.push(Command::Publish(PlanEvent::Status(rec.to_response())));
         self.plans.insert(rec.plan_id.clone(), rec);
+        self.retain(out);
         Ok(())
+    }
+
+    /// Forgets the oldest settled plans beyond `retain_plans` (settled: not queued, planning or driven).
+    pub(super) fn retain(&mut self, out: &mut Vec<Command>) {
+        if self.plans.len() <= self.config.retain_plans {
+            return;
+        }
+        let mut settled: Vec<(u64, String)> = self
+            .plans
+            .values()
+            .filter(|r| !matches!(r.status, PlanStatus::Queued | PlanStatus::Planning | PlanStatus::Active))
+            .map(|r| (r.seq, r.plan_id.clone()))
+            .collect();
+        let excess = settled.len().saturating_sub(self.config.retain_plans);
+        if excess == 0 {
+            return;
+        }
+        settled.sort_unstable();
+        for (_, plan_id) in settled.into_iter().take(excess) {
+            self.plans.remove(&plan_id);
+            out.push(Command::ForgetPlan { plan_id });
+        }
     }
 
     pub(super) fn cancel(&mut self, plan_id: &str, now_ms: u64, out: &mut Vec<Command>) -> Result<()> {
@@ -134,7 +157,7 @@ impl Engine {
                 clearance: site.map.clearance.clone(),
                 grid: site.map.grid.clone(),
             });
-            self.sites.insert(site.record.site.clone(), site);
+            self.sites.insert(site.record.site.clone(), Arc::new(site));
         }
         let mut plans = plans;
         plans.sort_by_key(|r| r.seq);
@@ -175,6 +198,8 @@ impl Engine {
             r.assigned_ms = now_ms;
             self.route(&robot, out);
         }
+        // A smaller `retain_plans` than the last run's takes effect at once.
+        self.retain(out);
     }
 
     /// Starts queued jobs while workers are free.

@@ -484,3 +484,63 @@ fn assign_tracks_progress_to_done_and_moves_between_robots() {
     .expect("lost");
     assert_eq!(e.robot("r1").map(|r| r.alive), Some(false));
 }
+
+#[test]
+fn settled_plans_beyond_retain_plans_are_forgotten_oldest_first_in_flight_never() {
+    let mut e = Engine::new(EngineConfig {
+        workers: 1,
+        retain_plans: 2,
+        ..EngineConfig::default()
+    });
+    e.handle(site_event("s"), 0).expect("site");
+    let forgotten = |cmds: &[Command]| -> Vec<String> {
+        cmds.iter()
+            .filter_map(|c| match c {
+                Command::ForgetPlan { plan_id } => Some(plan_id.clone()),
+                _ => None,
+            })
+            .collect()
+    };
+    // p-1 and p-2 computed (settled), p-3 and p-4 still queued or planning.
+    for (i, id) in ["p-1", "p-2"].iter().enumerate() {
+        e.handle(Event::PlanRequested { request: request("s") }, 10 + i as u64)
+            .expect("accepted");
+        let cmds = e
+            .handle(
+                Event::JobFinished {
+                    plan_id: (*id).into(),
+                    outcome: planned(),
+                },
+                20 + i as u64,
+            )
+            .expect("finished");
+        assert!(forgotten(&cmds).is_empty());
+    }
+    let c3 = e
+        .handle(Event::PlanRequested { request: request("s") }, 30)
+        .expect("p-3");
+    assert!(forgotten(&c3).is_empty(), "two settled plans are within the limit");
+    e.handle(Event::CancelRequested { plan_id: "p-3".into() }, 31)
+        .expect("cancel");
+    // p-3 cancelled: three settled, one over: the oldest goes, the in-flight p-4 never.
+    let c4 = e
+        .handle(Event::PlanRequested { request: request("s") }, 40)
+        .expect("p-4");
+    assert_eq!(forgotten(&c4), vec!["p-1".to_string()]);
+    assert!(e.plan("p-1").is_none() && e.plan("p-2").is_some() && e.plan("p-4").is_some());
+    // A snapshot taken before a request is the engine as it was (what the daemon puts back on a store failure).
+    let snapshot = e.clone();
+    e.handle(Event::PlanRequested { request: request("s") }, 50)
+        .expect("p-5");
+    assert!(e.plan("p-5").is_some());
+    e = snapshot;
+    assert!(e.plan("p-5").is_none());
+    let c = e
+        .handle(Event::PlanRequested { request: request("s") }, 60)
+        .expect("p-5 again");
+    assert_eq!(
+        stored(&c)[0].0,
+        "p-5",
+        "an undone request gives its id out again: nothing of it was stored"
+    );
+}

@@ -209,6 +209,74 @@ fn skipped_stretches_are_listed_as_missed() {
     assert_eq!(status.missed, vec![vec![[1.3, 0.5], [2.5, 0.5]]]);
 }
 
+/// The skip that ends the plan where the robot stands (nothing beyond the blockage reachable).
+fn ending_skip() -> CheckOutcome {
+    CheckOutcome::Correct(ProposedCorrection {
+        from: 1,
+        to: 6,
+        waypoints: vec![wp(0.9, 0.5, 1.0)],
+        reason: CorrectionReason::Skipped,
+        dt_after_s: 0.0,
+        skipped: vec![[0.9, 0.5], [2.5, 0.5]],
+        iterations: 0,
+    })
+}
+
+fn published(cmds: &[Command]) -> usize {
+    cmds.iter()
+        .filter(|c| matches!(c, Command::PublishCorrection(_)))
+        .count()
+}
+
+#[test]
+fn an_end_of_plan_at_a_blockage_waits_until_the_blockage_has_stood_its_hold() {
+    let (mut e, _) = assigned();
+    let hold_ms = (WatchParams::default().end_hold_s * 1e3) as u64;
+    // Blocked at 1 s and still at 5 s: held; cleared at 6 s (the walker went): the hold starts again.
+    for (t, outcome, expect) in [
+        (1_000, ending_skip(), 0),
+        (5_000, ending_skip(), 0),
+        (6_000, CheckOutcome::Clear, 0),
+        (7_000, ending_skip(), 0),
+        (7_000 + hold_ms - 300, ending_skip(), 0),
+        (7_000 + hold_ms, ending_skip(), 1),
+    ] {
+        assert_eq!(
+            checks(&e.handle(pose(0.5), t).expect("pose")).len(),
+            1,
+            "a check at {t}"
+        );
+        let cmds = e.handle(finished(1, outcome), t).expect("done");
+        assert_eq!(published(&cmds), expect, "at {t} ms");
+    }
+    assert_eq!(
+        e.plan("p-1").map(|p| p.version),
+        Some(2),
+        "the end was sent once it had stood"
+    );
+}
+
+#[test]
+fn a_zero_hold_ends_the_plan_at_once_and_other_corrections_are_never_held() {
+    let mut e = Engine::new(EngineConfig {
+        watch: WatchParams {
+            end_hold_s: 0.0,
+            ..WatchParams::default()
+        },
+        ..EngineConfig::default()
+    });
+    e.handle(super::tests::site_event("s"), 0).expect("site");
+    let (mut e, _) = assigned_with(e);
+    e.handle(pose(0.5), 1000).expect("pose");
+    assert_eq!(published(&e.handle(finished(1, ending_skip()), 1001).expect("done")), 1);
+    let (mut e, _) = assigned();
+    e.handle(pose(0.5), 1000).expect("pose");
+    assert_eq!(
+        published(&e.handle(finished(1, proposal(2, 5, 1)), 1001).expect("done")),
+        1
+    );
+}
+
 #[test]
 fn watching_can_be_switched_off() {
     let mut e = Engine::new(EngineConfig {

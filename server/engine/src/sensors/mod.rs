@@ -15,6 +15,7 @@
 //! it is dropped with the reason the lookup gives then (`future`, `no_pose`).
 
 pub mod geometry;
+pub mod sweep;
 
 use std::collections::{BTreeMap, BTreeSet, HashMap, VecDeque};
 
@@ -24,6 +25,7 @@ use shift_proto::ros::laser_scan::decode_laser_scan;
 use shift_proto::ros::point_cloud2::{CloudXyz, decode_cloud_xyz};
 
 use self::geometry::{SensorOffset, robot_to_map, scan_to_map};
+use self::sweep::Sweep;
 use crate::pose_history::{PoseHistory, PoseHistoryParams, PoseLookupError};
 use crate::robots::Pose2;
 
@@ -125,6 +127,8 @@ pub struct Placed {
     pub points: Vec<[f64; 3]>,
     /// A scan: planar obstacles (no height band).
     pub planar: bool,
+    /// A scan: the free space its rays crossed (the live map forgets what they saw through).
+    pub sweep: Option<Sweep>,
     /// The message's stamp, nanoseconds (robot clock; 0 = unstamped).
     pub stamp_ns: i64,
     /// When it arrived, milliseconds (the caller's clock).
@@ -262,7 +266,7 @@ struct RobotSensors {
 
 /// Where a message stands after a placement attempt.
 enum Step {
-    Placed(Vec<[f64; 3]>),
+    Placed(Vec<[f64; 3]>, Option<Sweep>),
     Wait(PoseLookupError, Decoded),
     Drop(DropReason, String),
 }
@@ -479,7 +483,7 @@ impl SensorHub {
             // (as tf2's message filter does); only then does the end pose within the tolerance stand in.
             let patient = now_ms < deadline_ms;
             match self.place(robot, msg, patient) {
-                Step::Placed(points) => {
+                Step::Placed(points, sweep) => {
                     let r = self.robot(robot);
                     r.counts.placed += 1;
                     r.counts.points += points.len() as u64;
@@ -490,6 +494,7 @@ impl SensorHub {
                         stream,
                         planar: stream == Stream::Scan,
                         points,
+                        sweep,
                         stamp_ns,
                         received_ms,
                         waited: now_ms > received_ms,
@@ -537,21 +542,24 @@ impl SensorHub {
             Decoded::Cloud(c) => {
                 let frame = c.header.frame_id.trim_start_matches('/');
                 if frame.is_empty() || frame == self.params.map_frame {
-                    return Step::Placed(c.points);
+                    return Step::Placed(c.points, None);
                 }
                 match lookup(c.header.stamp.to_ns()) {
-                    Ok(pose) => Step::Placed(robot_to_map(&c.points, pose)),
+                    Ok(pose) => Step::Placed(robot_to_map(&c.points, pose), None),
                     // Older than the history: the latest pose is closer than nothing (a cloud's points are
                     // obstacles for a while; a scan's are not worth a wrong place).
                     Err(PoseLookupError::TooOld { .. }) => match history.and_then(PoseHistory::latest) {
-                        Some(pose) => Step::Placed(robot_to_map(&c.points, pose)),
+                        Some(pose) => Step::Placed(robot_to_map(&c.points, pose), None),
                         None => Step::Wait(PoseLookupError::Empty, Decoded::Cloud(c)),
                     },
                     Err(e) => Step::Wait(e, Decoded::Cloud(c)),
                 }
             }
             Decoded::Scan(s) => match lookup(s.header.stamp.to_ns()) {
-                Ok(pose) => Step::Placed(scan_to_map(&s, pose, self.params.scan_offset)),
+                Ok(pose) => Step::Placed(
+                    scan_to_map(&s, pose, self.params.scan_offset),
+                    Sweep::of_scan(&s, pose, self.params.scan_offset),
+                ),
                 Err(e @ PoseLookupError::TooOld { .. }) => Step::Drop(DropReason::TooOld, format!("{robot}: {e}")),
                 Err(e) => Step::Wait(e, Decoded::Scan(s)),
             },

@@ -1,0 +1,309 @@
+//! Soak (issue 22): a real `shiftd` runs while a fleet works it — robots, each its own Zenoh participant,
+//! drive their plans at 10 Hz odometry with clouds at 2 Hz in which obstacles appear ahead of them (so paths are
+//! checked and corrected), a backend asks for a plan every few seconds and hands each new plan to the next
+//! robot (its old plan settles). Every `SHIFT_SOAK_SAMPLE_S` the daemon's RSS, threads and open files, the
+//! store's size, the plans it holds and the live map's points are sampled from outside (`/proc`, the API).
+//!
+//! After warm-up (the first third) nothing may keep growing: RSS, threads, open files, the store file; the
+//! live map stays within `max_points` and the plans held within `retain_plans` plus those in flight.
+//!
+//! The default is the 3-minute version the test command runs. The 30-minute soak of the closing note is
+//! `SHIFT_SOAK_S=1800 SHIFT_SOAK_SAMPLE_S=60 cargo test -p shiftd --test soak -- --nocapture`.
+
+mod common;
+
+#[allow(dead_code)]
+#[path = "../../../tests/src/path.rs"]
+mod path;
+
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, Result, bail, ensure};
+use serde_json::json;
+use shift_proto::PlanDocument;
+
+use common::{Daemon, Robot, free_port};
+
+const RETAIN: usize = 12;
+const MAX_POINTS: u64 = 30_000;
+
+fn env_u64(key: &str, default: u64) -> u64 {
+    std::env::var(key).ok().and_then(|v| v.parse().ok()).unwrap_or(default)
+}
+
+/// One sample of the daemon from outside.
+#[derive(Debug, Clone)]
+struct Sample {
+    at_s: f64,
+    rss_kb: u64,
+    threads: u64,
+    fds: u64,
+    store_bytes: u64,
+    plans: u64,
+    live_points: u64,
+    corrections: u64,
+    /// Plans held by status, e.g. `active 10, ready 12`.
+    statuses: String,
+}
+
+fn proc_status(pid: u32, field: &str) -> Result<u64> {
+    let text = std::fs::read_to_string(format!("/proc/{pid}/status"))?;
+    let line = text
+        .lines()
+        .find(|l| l.starts_with(field))
+        .with_context(|| format!("{field} in /proc/{pid}/status"))?;
+    Ok(line.split_whitespace().nth(1).context("value")?.parse()?)
+}
+
+async fn sample(d: &Daemon, dir: &Path, started: Instant, corrections: u64) -> Result<Sample> {
+    let pid = d.pid();
+    let (_, plans) = d.get("/v1/plans?limit=500").await?;
+    let (_, site) = d.get("/v1/sites/demo").await?;
+    let mut by_status = std::collections::BTreeMap::<String, usize>::new();
+    for p in plans["items"].as_array().into_iter().flatten() {
+        *by_status
+            .entry(p["status"].as_str().unwrap_or("?").to_owned())
+            .or_default() += 1;
+    }
+    let statuses = by_status
+        .iter()
+        .map(|(k, n)| format!("{k} {n}"))
+        .collect::<Vec<_>>()
+        .join(", ");
+    Ok(Sample {
+        at_s: started.elapsed().as_secs_f64(),
+        rss_kb: proc_status(pid, "VmRSS:")?,
+        threads: proc_status(pid, "Threads:")?,
+        fds: std::fs::read_dir(format!("/proc/{pid}/fd"))?.count() as u64,
+        store_bytes: std::fs::metadata(dir.join("data").join("shift.redb"))?.len(),
+        plans: plans["items"].as_array().map_or(0, Vec::len) as u64,
+        live_points: site["points_in_tree"].as_u64().unwrap_or(0),
+        corrections,
+        statuses,
+    })
+}
+
+/// A robot and the plan it drives.
+struct Driver {
+    robot: Robot,
+    id: String,
+    plan: Option<(String, PlanDocument, f64)>,
+    along_m: f64,
+}
+
+async fn fetch_path(d: &Daemon, plan_id: &str) -> Result<PlanDocument> {
+    let (code, doc) = d.get(&format!("/v1/plans/{plan_id}/path")).await?;
+    ensure!(code == 200, "path of {plan_id}: {code} {doc}");
+    Ok(serde_json::from_value(doc)?)
+}
+
+/// The pose `s` metres along the path, with the heading of its segment.
+fn pose_at(doc: &PlanDocument, s: f64) -> Option<(f64, f64, f64)> {
+    let w = &doc.waypoints;
+    let mut acc = 0.0;
+    for p in w.windows(2) {
+        let len = (p[1].x - p[0].x).hypot(p[1].y - p[0].y);
+        if acc + len >= s && len > 1e-9 {
+            let t = (s - acc) / len;
+            let h = (p[1].y - p[0].y).atan2(p[1].x - p[0].x);
+            return Some((p[0].x + t * (p[1].x - p[0].x), p[0].y + t * (p[1].y - p[0].y), h));
+        }
+        acc += len;
+    }
+    None
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_working_fleet_leaves_memory_threads_files_and_store_flat() -> Result<()> {
+    let duration = Duration::from_secs(env_u64("SHIFT_SOAK_S", 180));
+    let sample_every = Duration::from_secs(env_u64("SHIFT_SOAK_SAMPLE_S", 10));
+    let robots = env_u64("SHIFT_SOAK_ROBOTS", 10) as usize;
+    let plan_every = Duration::from_secs(env_u64("SHIFT_SOAK_PLAN_S", 5));
+    let dir = tempfile::tempdir()?;
+    let (port, zport) = (free_port()?, free_port()?);
+    let endpoint = format!("tcp/127.0.0.1:{zport}");
+    let config = format!(
+        "[store]\nretain_plans = {RETAIN}\n[zenoh]\nknown_tolerance_m = 0.0\nmax_points = {MAX_POINTS}\n\
+         horizon_s = 30\n[jobs]\nworkers = 1\nshutdown_grace_s = 0\n"
+    );
+    let d = Daemon::start(dir.path(), port, &endpoint, &config).await?;
+    let request = json!({"site": "demo", "start": [0.5, 0.5], "robot": {"radius": 0.15, "tool_width": 0.3}});
+
+    let mut fleet = Vec::new();
+    for i in 0..robots {
+        let id = format!("soak-{i}");
+        fleet.push(Driver {
+            robot: Robot::join(&endpoint, &id).await?,
+            id,
+            plan: None,
+            along_m: 0.0,
+        });
+    }
+    let mut pending: Vec<String> = Vec::new();
+    let mut next_robot = 0usize;
+    let mut rng = 0x5eed_50a4_u64;
+    let mut unit = move || {
+        rng ^= rng << 13;
+        rng ^= rng >> 7;
+        rng ^= rng << 17;
+        (rng >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let started = Instant::now();
+    let (mut next_plan, mut next_sample) = (started, started);
+    let mut stamp = 10_000_000_000i64;
+    let (mut tick, mut corrections, mut plans_made, mut assigned) = (0u64, 0u64, 0u64, 0u64);
+    let mut samples: Vec<Sample> = Vec::new();
+    let tick_len = Duration::from_millis(100);
+    while started.elapsed() < duration {
+        let tick_start = Instant::now();
+        if tick_start >= next_plan {
+            next_plan += plan_every;
+            let (code, acc) = d.post("/v1/plans", &request).await?;
+            ensure!(code == 202, "plan refused: {code} {acc}");
+            pending.push(acc["plan_id"].as_str().context("plan id")?.to_owned());
+            plans_made += 1;
+        }
+        // Ready plans go to the next robot in turn; its previous plan settles.
+        let mut still = Vec::new();
+        for id in std::mem::take(&mut pending) {
+            let (code, st) = d.get(&format!("/v1/plans/{id}")).await?;
+            ensure!(code == 200, "plan {id}: {code} {st}");
+            match st["status"].as_str() {
+                Some("ready") => {
+                    let driver = &mut fleet[next_robot % robots];
+                    next_robot += 1;
+                    let (code, st) = d
+                        .post(&format!("/v1/plans/{id}/assign"), &json!({"robot": driver.id}))
+                        .await?;
+                    ensure!(code == 200, "assign {id}: {code} {st}");
+                    let doc = fetch_path(&d, &id).await?;
+                    let total = path::length(&doc.waypoints);
+                    driver.plan = Some((id, doc, total));
+                    driver.along_m = 0.0;
+                    assigned += 1;
+                }
+                Some("failed") => bail!("plan {id} failed: {st}"),
+                _ => still.push(id),
+            }
+        }
+        pending = still;
+        // Odometry at 10 Hz (0.5 m/s along the plan), clouds at 2 Hz with an obstacle ahead now and then.
+        for driver in &mut fleet {
+            let Some((plan_id, doc, total)) = &driver.plan else {
+                continue;
+            };
+            driver.along_m = (driver.along_m + 0.05) % total.max(1.0);
+            let Some((x, y, h)) = pose_at(doc, driver.along_m) else {
+                continue;
+            };
+            driver.robot.odom(x, y, h, stamp).await?;
+            if tick.is_multiple_of(5) {
+                let points = if unit() < 0.3 {
+                    path::post(x + 1.5 * h.cos(), y + 1.5 * h.sin())
+                } else {
+                    Vec::new()
+                };
+                driver.robot.cloud(&points, stamp).await?;
+            }
+            let got = driver.robot.drain_corrections()?;
+            if !got.is_empty() {
+                corrections += got.len() as u64;
+                let plan_id = plan_id.clone();
+                let doc = fetch_path(&d, &plan_id).await?;
+                let total = path::length(&doc.waypoints);
+                driver.plan = Some((plan_id, doc, total));
+            }
+        }
+        stamp += 100_000_000;
+        tick += 1;
+        if tick_start >= next_sample {
+            next_sample += sample_every;
+            let s = sample(&d, dir.path(), started, corrections).await?;
+            eprintln!(
+                "soak t={:>5.0}s rss={:>7} kB threads={:>3} fds={:>3} store={:>9} B plans={:>3} live_points={:>6} \
+                 corrections={} ({})",
+                s.at_s, s.rss_kb, s.threads, s.fds, s.store_bytes, s.plans, s.live_points, s.corrections, s.statuses
+            );
+            samples.push(s);
+        }
+        if let Some(rest) = tick_len.checked_sub(tick_start.elapsed()) {
+            tokio::time::sleep(rest).await;
+        }
+    }
+    samples.push(sample(&d, dir.path(), started, corrections).await?);
+    eprintln!("soak: plans held at the end: {}", samples[samples.len() - 1].statuses);
+    for driver in fleet {
+        driver.robot.leave().await?;
+    }
+
+    let warm = samples
+        .iter()
+        .position(|s| s.at_s >= duration.as_secs_f64() / 3.0)
+        .context("samples after warm-up")?;
+    let (after, last) = (&samples[warm], &samples[samples.len() - 1]);
+    let max_after = |f: fn(&Sample) -> u64| samples[warm..].iter().map(f).max().unwrap_or(0);
+    // RSS is the allocator's high-water mark: it steps up with peaks of concurrent work and seldom comes down.
+    // Growth is measured against the highest RSS of the warm-up.
+    let warm_peak = samples[..=warm].iter().map(|s| s.rss_kb).max().unwrap_or(after.rss_kb);
+    let growth = last.rss_kb as f64 / warm_peak as f64;
+    eprintln!(
+        "soak: {:.0} s, {robots} robots, {plans_made} plans asked, {assigned} assigned, {corrections} corrections; \
+         RSS {} kB at most in warm-up (to {:.0} s) → {} kB at the end ({:+.1} %); threads {} → {}; fds {} → {}; \
+         store {} → {} B",
+        last.at_s,
+        warm_peak,
+        after.at_s,
+        last.rss_kb,
+        (growth - 1.0) * 100.0,
+        after.threads,
+        last.threads,
+        after.fds,
+        last.fds,
+        after.store_bytes,
+        last.store_bytes
+    );
+    ensure!(
+        assigned >= robots as u64,
+        "every robot drove a plan ({assigned} assigned)"
+    );
+    ensure!(
+        corrections > 0,
+        "obstacles appeared ahead but no correction came: the soak tested no watch"
+    );
+    ensure!(
+        plans_made as usize > RETAIN,
+        "too few plans to test retention ({plans_made})"
+    );
+    // Bounds by configuration.
+    for s in &samples {
+        ensure!(s.live_points <= MAX_POINTS, "live map over max_points: {s:?}");
+        ensure!(
+            s.plans as usize <= RETAIN + robots + 4,
+            "plans held beyond retain_plans + driven + in flight: {s:?}"
+        );
+    }
+    // Flat after warm-up.
+    ensure!(growth <= 1.10, "RSS grew {:.1} % after warm-up", (growth - 1.0) * 100.0);
+    ensure!(
+        last.fds <= after.fds + 4,
+        "open files grew after warm-up: {} → {}",
+        after.fds,
+        last.fds
+    );
+    ensure!(
+        max_after(|s| s.threads)
+            <= after
+                .threads
+                .max(samples[..warm].iter().map(|s| s.threads).max().unwrap_or(0))
+                + 8,
+        "threads grew after warm-up"
+    );
+    ensure!(
+        last.store_bytes as f64 <= after.store_bytes as f64 * 1.5 + 1_048_576.0,
+        "store grew after warm-up: {} → {} B",
+        after.store_bytes,
+        last.store_bytes
+    );
+    Ok(())
+}
