@@ -38,7 +38,7 @@ use shift_proto::keys::{KeySpace, Ros2Mapping};
 use shift_sim::sim::SimConfig;
 use shift_sim::world::World;
 use shift_sim::{Report, RunOptions};
-use shift_tests::bench::Scrape;
+use shift_tests::bench::{Scrape, quantile};
 
 /// Robot body and tool, metres; speed, m/s.
 const RADIUS_M: f64 = 0.3;
@@ -286,6 +286,9 @@ struct RunFigures {
     n: usize,
     report: Report,
     drops: Vec<(&'static str, f64)>,
+    /// Daemon-side p50 / p99 in ms: a scan's arrival → in the live map, and one path check's compute time.
+    ingest_ms: (Option<f64>, Option<f64>),
+    check_ms: (Option<f64>, Option<f64>),
     cpu_median: f64,
     cpu_max: f64,
     rss_max: f64,
@@ -341,12 +344,19 @@ async fn run_fleet(args: &Args, bin: &Path, n: usize) -> Result<RunFigures> {
     ]
     .map(|k| (k, counter(&after, k) - counter(&before, k)))
     .to_vec();
+    let ms = |name: &str| {
+        let q = |p: f64| quantile(&before, &after, name, p).map(|s| s * 1e3);
+        (q(0.5), q(0.99))
+    };
+    let (ingest_ms, check_ms) = (ms("shift_ingest_latency_seconds"), ms("shift_check_seconds"));
     let readings = readings.lock().map(|r| r.clone()).unwrap_or_default();
     let driving: Vec<Reading> = readings.iter().copied().filter(|r| !r.planning).collect();
     Ok(RunFigures {
         n,
         report,
         drops,
+        ingest_ms,
+        check_ms,
         cpu_median: median(driving.iter().map(|r| r.cpu_pct).collect()),
         cpu_max: driving.iter().map(|r| r.cpu_pct).fold(f64::NAN, f64::max),
         rss_max: readings.iter().map(|r| r.rss_mb).fold(f64::NAN, f64::max),
@@ -360,6 +370,7 @@ fn print(f: &RunFigures, args: &Args) {
     let per_robot_s = f.n as f64 * t.wall_s.max(1e-9);
     let lat = t.correction_latency_ms.as_ref();
     let fmt = |v: Option<f64>| v.map_or("-".to_owned(), |v| format!("{v:.0}"));
+    let fmt1 = |v: Option<f64>| v.map_or("-".to_owned(), |v| format!("{v:.1}"));
     println!(
         "\n## {} robots, speedup {} ({:.0} simulated s, {:.1} wall s)",
         f.n, args.speedup, args.sim_s, t.wall_s
@@ -391,6 +402,16 @@ fn print(f: &RunFigures, args: &Args) {
         lat.map_or(0, |q| q.n)
     );
     println!("| sights without a correction in 2 s | {} | |", t.sights_unanswered);
+    println!(
+        "| daemon: scan arrival → live map p50 / p99 | {} / {} ms | |",
+        fmt1(f.ingest_ms.0),
+        fmt1(f.ingest_ms.1)
+    );
+    println!(
+        "| daemon: one path check p50 / p99 | {} / {} ms | |",
+        fmt1(f.check_ms.0),
+        fmt1(f.check_ms.1)
+    );
     println!(
         "| daemon CPU, % of one core, median / max ({} s read) | {:.0} / {:.0} | |",
         f.seconds_read, f.cpu_median, f.cpu_max

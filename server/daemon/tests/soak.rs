@@ -243,19 +243,29 @@ async fn a_working_fleet_leaves_memory_threads_files_and_store_flat() -> Result<
         .context("samples after warm-up")?;
     let (after, last) = (&samples[warm], &samples[samples.len() - 1]);
     let max_after = |f: fn(&Sample) -> u64| samples[warm..].iter().map(f).max().unwrap_or(0);
-    // RSS is the allocator's high-water mark: it steps up with peaks of concurrent work and seldom comes down.
-    // Growth is measured against the highest RSS of the warm-up.
+    // RSS follows the work in hand (jemalloc hands freed pages back within seconds) and the fleet's work comes in
+    // waves (robots finish their plans and wait for the next), so one sample says little. Flat means: the median
+    // RSS of the last third is not above the highest RSS of the warm-up by more than the bound. A leak raises
+    // the median; a wave of work raises single samples.
     let warm_peak = samples[..=warm].iter().map(|s| s.rss_kb).max().unwrap_or(after.rss_kb);
-    let growth = last.rss_kb as f64 / warm_peak as f64;
+    let mut tail: Vec<u64> = samples[samples.len() - samples.len().div_ceil(3)..]
+        .iter()
+        .map(|s| s.rss_kb)
+        .collect();
+    tail.sort_unstable();
+    let tail_median = tail[tail.len() / 2];
+    let growth = tail_median as f64 / warm_peak as f64;
     eprintln!(
         "soak: {:.0} s, {robots} robots, {plans_made} plans asked, {assigned} assigned, {corrections} corrections; \
-         RSS {} kB at most in warm-up (to {:.0} s) → {} kB at the end ({:+.1} %); threads {} → {}; fds {} → {}; \
-         store {} → {} B",
+         RSS {} kB at most in warm-up (to {:.0} s) → median {} kB over the last third ({:+.1} %), {} kB at most \
+         after warm-up, {} kB at the end; threads {} → {}; fds {} → {}; store {} → {} B",
         last.at_s,
         warm_peak,
         after.at_s,
-        last.rss_kb,
+        tail_median,
         (growth - 1.0) * 100.0,
+        max_after(|s| s.rss_kb),
+        last.rss_kb,
         after.threads,
         last.threads,
         after.fds,
@@ -284,7 +294,13 @@ async fn a_working_fleet_leaves_memory_threads_files_and_store_flat() -> Result<
         );
     }
     // Flat after warm-up.
-    ensure!(growth <= 1.10, "RSS grew {:.1} % after warm-up", (growth - 1.0) * 100.0);
+    // Issue 22's bar is 5 % over 30 minutes; three minutes of ramping fleet get 10 %.
+    let bound = if duration.as_secs() >= 1200 { 1.05 } else { 1.10 };
+    ensure!(
+        growth <= bound,
+        "RSS grew {:.1} % after warm-up (median of the last third against the warm-up's peak)",
+        (growth - 1.0) * 100.0
+    );
     ensure!(
         last.fds <= after.fds + 4,
         "open files grew after warm-up: {} → {}",
@@ -299,11 +315,13 @@ async fn a_working_fleet_leaves_memory_threads_files_and_store_flat() -> Result<
                 + 8,
         "threads grew after warm-up"
     );
+    // redb's file grows in doublings and shrinks when its tail frees (30 minutes: 6 → 25 → 9 → 17 MB): bounded
+    // means it never grows past the largest size of the warm-up (with one 1 MiB step of slack).
+    let warm_store = samples[..=warm].iter().map(|s| s.store_bytes).max().unwrap_or(0);
     ensure!(
-        last.store_bytes as f64 <= after.store_bytes as f64 * 1.5 + 1_048_576.0,
-        "store grew after warm-up: {} → {} B",
-        after.store_bytes,
-        last.store_bytes
+        max_after(|s| s.store_bytes) <= warm_store + 1_048_576,
+        "store grew after warm-up: at most {warm_store} B in warm-up, {} B after",
+        max_after(|s| s.store_bytes)
     );
     Ok(())
 }
