@@ -2,30 +2,27 @@
 //! does not hold across the robot's path inside the daemon's watch window, to the next correction the robot
 //! applies. Measured by the simulator on its own clock (wall time), independently of what the daemon reports.
 //!
-//! "Across the path" uses the daemon's own test (seed 000 Alg. 1, `[watch]`): a return within
-//! `radius + margin` of a path point that lies within `window_radius` of the robot. Returns on cells the
-//! static map already marks occupied (or next to them, for the laser's spread) are not news. A sight that no
+//! "Across the path" is what the daemon must correct whatever its cost threshold (seed 000 Alg. 1 counts any
+//! collision as a breach): a return closer than the robot's radius to a path point that lies within
+//! `window_radius` of the robot — the body would touch it. A return only inside the clearance margin may be
+//! judged harmless (its path cost under J_th), so it starts no clock. Returns on cells the static map already
+//! marks occupied (or next to them, for the laser's spread) are not news. A sight that no
 //! correction follows within [`SightClock::patience_s`] is counted as unanswered and forgotten (a mover that
 //! walked on, an obstacle the daemon judged harmless, or a correction that never came).
 
 use shift_planner::geom::Point2;
 use shift_planner::map::OccupancyGrid;
 
-/// The daemon's watch parameters the sight test mirrors (its defaults: `[watch]` of shiftd's config).
+/// The daemon's watch window the sight test mirrors (its default: `[watch] window_radius_m` of shiftd's config).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct WatchWindow {
     /// Radius of the detection window round the robot, metres.
     pub window_radius_m: f64,
-    /// Clearance beyond the robot radius, metres.
-    pub margin_m: f64,
 }
 
 impl Default for WatchWindow {
     fn default() -> Self {
-        Self {
-            window_radius_m: 3.0,
-            margin_m: 0.05,
-        }
+        Self { window_radius_m: 3.0 }
     }
 }
 
@@ -39,7 +36,6 @@ pub fn news_on_path(
     window: WatchWindow,
     map: &OccupancyGrid,
 ) -> bool {
-    let d_safe = radius_m + window.margin_m;
     let ahead: Vec<Point2> = path
         .iter()
         .copied()
@@ -49,8 +45,8 @@ pub fn news_on_path(
         return false;
     }
     seen.iter().any(|p| {
-        (*p - robot).norm() <= window.window_radius_m + d_safe
-            && ahead.iter().any(|q| (*p - *q).norm() < d_safe)
+        (*p - robot).norm() <= window.window_radius_m + radius_m
+            && ahead.iter().any(|q| (*p - *q).norm() < radius_m)
             && !near_known(map, *p)
     })
 }
@@ -133,7 +129,8 @@ mod tests {
         let w = WatchWindow::default();
         let on_path = [Point2::new(2.5, 5.1)];
         assert!(news_on_path(&on_path, &path, robot, 0.25, w, &map));
-        // Beside the path, beyond the window, or on a known wall: no news.
+        // Only inside the clearance margin, beside the path, beyond the window, or on a known wall: no news.
+        assert!(!news_on_path(&[Point2::new(2.5, 5.28)], &path, robot, 0.25, w, &map));
         assert!(!news_on_path(&[Point2::new(2.5, 5.6)], &path, robot, 0.25, w, &map));
         assert!(!news_on_path(&[Point2::new(6.0, 5.0)], &path, robot, 0.25, w, &map));
         let wall_path: Vec<Point2> = (0..30).map(|k| Point2::new(5.05, 6.5 + 0.1 * f64::from(k))).collect();
