@@ -97,6 +97,8 @@ impl Engine {
         }
         r.assignment = Some(Assignment::new(plan_id.to_owned(), doc.clone()));
         r.assigned_ms = now_ms;
+        // A blockage held on the old plan says nothing of the new one.
+        r.watch.end_proposed_since_ms = None;
         out.push(Command::PublishPlan {
             robot: robot.to_owned(),
             doc,

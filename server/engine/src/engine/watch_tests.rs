@@ -257,6 +257,32 @@ fn an_end_of_plan_at_a_blockage_waits_until_the_blockage_has_stood_its_hold() {
 }
 
 #[test]
+fn a_new_assignment_starts_its_own_hold() {
+    let (mut e, doc) = assigned();
+    e.handle(pose(0.5), 1_000).expect("pose");
+    assert_eq!(
+        published(&e.handle(finished(1, ending_skip()), 1_000).expect("done")),
+        0
+    );
+    // The same plan assigned again much later: a blockage now is new, not one that has stood since 1 s.
+    let later = 1_000 + 2 * (WatchParams::default().end_hold_s * 1e3) as u64;
+    e.handle(
+        Event::AssignPlan {
+            plan_id: "p-1".into(),
+            robot: "r1".into(),
+            doc,
+        },
+        later,
+    )
+    .expect("assigned again");
+    e.handle(pose(0.5), later + 300).expect("pose");
+    assert_eq!(
+        published(&e.handle(finished(1, ending_skip()), later + 300).expect("done")),
+        0
+    );
+}
+
+#[test]
 fn a_zero_hold_ends_the_plan_at_once_and_other_corrections_are_never_held() {
     let mut e = Engine::new(EngineConfig {
         watch: WatchParams {
