@@ -50,45 +50,30 @@ fn make_image(img: &Path, mb: u64) -> Result<()> {
     Ok(())
 }
 
+/// `unshare` running `script` (`sh -c`, with `$0` the image and `$1` the mount point) in a private mount
+/// namespace, as arguments.
+fn in_namespace(script: &str, img: &Path, mnt: &Path) -> Result<Vec<String>> {
+    let head = ["--mount", "--propagation", "private", "--", "sh", "-c", script];
+    let mut args: Vec<String> = head.map(str::to_owned).to_vec();
+    args.push(path_str(img)?.to_owned());
+    args.push(path_str(mnt)?.to_owned());
+    Ok(args)
+}
+
 /// Whether this machine lets the test mount a loop device in a namespace of its own.
 fn can_mount(img: &Path, mnt: &Path) -> bool {
-    let script = "mount -o loop \"$0\" \"$1\" && umount \"$1\"";
-    let Ok(img) = path_str(img) else { return false };
-    let Ok(mnt) = path_str(mnt) else { return false };
-    run(
-        "unshare",
-        &[
-            "--mount",
-            "--propagation",
-            "private",
-            "--",
-            "sh",
-            "-c",
-            script,
-            img,
-            mnt,
-        ],
-    )
-    .map(|o| o.status.success())
-    .unwrap_or(false)
+    let Ok(args) = in_namespace("mount -o loop \"$0\" \"$1\" && umount \"$1\"", img, mnt) else {
+        return false;
+    };
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    run("unshare", &args).map(|o| o.status.success()).unwrap_or(false)
 }
 
 /// The wrapper that starts shiftd on the image mounted at `mnt`.
 fn mounted(img: &Path, mnt: &Path) -> Result<Vec<String>> {
-    Ok([
-        "unshare",
-        "--mount",
-        "--propagation",
-        "private",
-        "--",
-        "sh",
-        "-c",
-        MOUNT_THEN_EXEC,
-        path_str(img)?,
-        path_str(mnt)?,
-    ]
-    .map(str::to_owned)
-    .to_vec())
+    let mut wrapper = vec!["unshare".to_owned()];
+    wrapper.extend(in_namespace(MOUNT_THEN_EXEC, img, mnt)?);
+    Ok(wrapper)
 }
 
 /// The loop devices backing `img` (`/dev/loopN` → `loopN`).

@@ -353,6 +353,26 @@ mod tests {
         assert_eq!(near.len(), 1);
     }
 
+    /// The sweep of a laser at (2, 3) facing +x whose rays start at `angle_min`, `increment` apart.
+    fn sweep_from_2_3(ranges: Vec<f32>, angle_min: f32, increment: f32) -> Sweep {
+        let scan = shift_proto::ros::LaserScan {
+            angle_min,
+            angle_max: angle_min + increment * (ranges.len() as f32 - 1.0),
+            angle_increment: increment,
+            range_min: 0.1,
+            range_max: 10.0,
+            ranges,
+            ..shift_proto::ros::LaserScan::default()
+        };
+        let pose = crate::robots::Pose2 {
+            x: 2.0,
+            y: 3.0,
+            yaw: 0.0,
+            stamp_ns: 0,
+        };
+        Sweep::of_scan(&scan, pose, crate::sensors::geometry::SensorOffset::default()).expect("usable")
+    }
+
     #[test]
     fn a_scan_clears_the_trail_it_sees_through_and_keeps_what_it_hits() {
         let mut m = map();
@@ -367,22 +387,7 @@ mod tests {
         let rays = 61;
         let mut ranges = vec![6.0_f32; rays];
         ranges[30] = 3.0;
-        let scan = shift_proto::ros::LaserScan {
-            angle_min: -30f32.to_radians(),
-            angle_max: 30f32.to_radians(),
-            angle_increment: 1f32.to_radians(),
-            range_min: 0.1,
-            range_max: 10.0,
-            ranges,
-            ..shift_proto::ros::LaserScan::default()
-        };
-        let pose = crate::robots::Pose2 {
-            x: 2.0,
-            y: 3.0,
-            yaw: 0.0,
-            stamp_ns: 0,
-        };
-        let sweep = Sweep::of_scan(&scan, pose, crate::sensors::geometry::SensorOffset::default()).expect("usable");
+        let sweep = sweep_from_2_3(ranges, -30f32.to_radians(), 1f32.to_radians());
         let cleared = m.clear_through(&sweep);
         // Kept: the 3-D point, the walker's own return (its ray stopped there) and the trail points next to it
         // whose neighbouring ray is the short one.
@@ -427,22 +432,7 @@ mod tests {
         )
         .expect("valid params");
         m.ingest(&[[5.0, 3.0, 0.0]], true, 1);
-        let scan = shift_proto::ros::LaserScan {
-            angle_min: -0.1,
-            angle_max: 0.1,
-            angle_increment: 0.1,
-            range_min: 0.1,
-            range_max: 10.0,
-            ranges: vec![6.0; 3],
-            ..shift_proto::ros::LaserScan::default()
-        };
-        let pose = crate::robots::Pose2 {
-            x: 2.0,
-            y: 3.0,
-            yaw: 0.0,
-            stamp_ns: 0,
-        };
-        let sweep = Sweep::of_scan(&scan, pose, crate::sensors::geometry::SensorOffset::default()).expect("usable");
+        let sweep = sweep_from_2_3(vec![6.0; 3], -0.1, 0.1);
         assert_eq!(m.clear_through(&sweep), 0);
         assert_eq!(m.tree().len(), 1);
     }
