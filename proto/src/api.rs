@@ -293,6 +293,10 @@ pub enum WatchHealth {
     /// No points reached the site's live map for `zenoh.robot_timeout_s` while the robot is alive: new
     /// obstacles on its path cannot be seen.
     Blind,
+    /// The path is blocked up to its end, so the only correction would end the plan where the robot is; it is
+    /// held for `watch.end_hold_s` in case the blockage moves on (a person, a cart). The robot should wait
+    /// before the blockage; the plan goes on (`watching`) when it clears, or ends when the hold runs out.
+    Blocked,
 }
 
 /// Progress found away from where the robot was expected along its plan.

@@ -9,13 +9,25 @@ use std::time::Duration;
 use anyhow::{Context, Result, bail};
 use shift_client::Client;
 use shift_client::proto::keys::KeySpace;
-use shift_client::proto::{CorrectionDoc, OccupancyGridDoc, PlanRequest, PlanStatus, RobotSpec};
+use shift_client::proto::{
+    CorrectionDoc, OccupancyGridDoc, PlanRequest, PlanStatus, PlanStatusResponse, RobotSpec, WatchHealth,
+};
 use shift_client::robot::{Applied, FollowedPlan, RobotLink, RobotMessage};
 use shift_tests::TestServer;
 use shift_tests::fleet::{ScriptedRobot, fleet_config, room_grid};
 use shift_tests::path::{along, longest_straight};
 
 const LONG: Duration = Duration::from_secs(120);
+
+/// The next plan or correction; the plan statuses that come before it are kept in `statuses`.
+async fn next_not_status(link: &RobotLink, statuses: &mut Vec<PlanStatusResponse>) -> Result<RobotMessage> {
+    loop {
+        match tokio::time::timeout(LONG, link.recv()).await?? {
+            RobotMessage::Status(s) => statuses.push(*s),
+            other => return Ok(other),
+        }
+    }
+}
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_robot_follows_its_plan_and_a_correction_and_tail_prints_it() -> Result<()> {
@@ -92,7 +104,8 @@ async fn a_robot_follows_its_plan_and_a_correction_and_tail_prints_it() -> Resul
 
     // The plan arrives on r1's plan key.
     let mut followed = FollowedPlan::default();
-    let message = tokio::time::timeout(LONG, link.recv()).await??;
+    let mut statuses = Vec::new();
+    let message = next_not_status(&link, &mut statuses).await?;
     let RobotMessage::Plan(doc) = &message else {
         bail!("expected the plan first, got {message:?}");
     };
@@ -130,7 +143,7 @@ async fn a_robot_follows_its_plan_and_a_correction_and_tail_prints_it() -> Resul
     scripted.cloud("r1", &post).await?;
 
     // The correction applies by version.
-    let message = tokio::time::timeout(LONG, link.recv()).await??;
+    let message = next_not_status(&link, &mut statuses).await?;
     let RobotMessage::Correction(correction) = message.clone() else {
         bail!("expected a correction, got {message:?}");
     };
@@ -154,9 +167,26 @@ async fn a_robot_follows_its_plan_and_a_correction_and_tail_prints_it() -> Resul
             break served;
         }
         let message = tokio::time::timeout(LONG, link.recv()).await??;
+        if let RobotMessage::Status(s) = &message {
+            statuses.push((**s).clone());
+        }
         link.follow(&mut followed, message).await?;
     };
     assert_eq!(followed.doc(), Some(&served));
+    // The status of version 2 follows its correction.
+    while !statuses.iter().any(|s| s.version >= 2) {
+        if let RobotMessage::Status(s) = tokio::time::timeout(LONG, link.recv()).await?? {
+            statuses.push(*s);
+        }
+    }
+    // The plan's statuses reached its robot: assigned and watched, then at version 2.
+    assert!(
+        statuses
+            .iter()
+            .any(|s| s.plan_id == id && s.watch == Some(WatchHealth::Watching)),
+        "{statuses:?}"
+    );
+    assert!(statuses.iter().all(|s| s.robot.as_deref() == Some("r1")), "only r1's plans");
 
     // shiftctl printed the first correction, exactly.
     let mut stdout = tail.0.stdout.take().context("stdout")?;

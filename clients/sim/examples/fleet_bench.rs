@@ -289,6 +289,7 @@ struct RunFigures {
     /// Daemon-side p50 / p99 in ms: a scan's arrival → in the live map, and one path check's compute time.
     ingest_ms: (Option<f64>, Option<f64>),
     check_ms: (Option<f64>, Option<f64>),
+    engine_wait_ms: (Option<f64>, Option<f64>),
     cpu_median: f64,
     cpu_max: f64,
     rss_max: f64,
@@ -349,6 +350,7 @@ async fn run_fleet(args: &Args, bin: &Path, n: usize) -> Result<RunFigures> {
         (q(0.5), q(0.99))
     };
     let (ingest_ms, check_ms) = (ms("shift_ingest_latency_seconds"), ms("shift_check_seconds"));
+    let engine_wait_ms = ms("shift_engine_wait_seconds");
     let readings = readings.lock().map(|r| r.clone()).unwrap_or_default();
     let driving: Vec<Reading> = readings.iter().copied().filter(|r| !r.planning).collect();
     Ok(RunFigures {
@@ -357,6 +359,7 @@ async fn run_fleet(args: &Args, bin: &Path, n: usize) -> Result<RunFigures> {
         drops,
         ingest_ms,
         check_ms,
+        engine_wait_ms,
         cpu_median: median(driving.iter().map(|r| r.cpu_pct).collect()),
         cpu_max: driving.iter().map(|r| r.cpu_pct).fold(f64::NAN, f64::max),
         rss_max: readings.iter().map(|r| r.rss_mb).fold(f64::NAN, f64::max),
@@ -401,6 +404,13 @@ fn print(f: &RunFigures, args: &Args) {
         fmt(lat.map(|q| q.max)),
         lat.map_or(0, |q| q.n)
     );
+    let held = t.held_latency_ms.as_ref();
+    println!(
+        "| sights answered by holding the plan's end (status blocked) p50 / max (n) | {} / {} ms ({}) | |",
+        fmt(held.map(|q| q.p50)),
+        fmt(held.map(|q| q.max)),
+        held.map_or(0, |q| q.n)
+    );
     println!("| sights without a correction in 2 s | {} | |", t.sights_unanswered);
     println!(
         "| daemon: scan arrival → live map p50 / p99 | {} / {} ms | |",
@@ -411,6 +421,11 @@ fn print(f: &RunFigures, args: &Args) {
         "| daemon: one path check p50 / p99 | {} / {} ms | |",
         fmt1(f.check_ms.0),
         fmt1(f.check_ms.1)
+    );
+    println!(
+        "| daemon: an event's wait in the engine's inbox p50 / p99 | {} / {} ms | |",
+        fmt1(f.engine_wait_ms.0),
+        fmt1(f.engine_wait_ms.1)
     );
     println!(
         "| daemon CPU, % of one core, median / max ({} s read) | {:.0} / {:.0} | |",

@@ -83,6 +83,10 @@ pub struct Traffic {
     pub correction_latency_ms: Option<Quantiles>,
     /// Sights no correction followed in time.
     pub sights_unanswered: u64,
+    /// Sights the daemon answered by holding the plan's end at a blockage (status `blocked`), milliseconds to
+    /// that answer.
+    #[serde(default)]
+    pub held_latency_ms: Option<Quantiles>,
 }
 
 /// A few order statistics of a sample.

@@ -178,6 +178,7 @@ impl SimRobot {
                     return Applied::Stale;
                 }
             },
+            RobotMessage::Status(status) => return self.followed.on_status(&status),
         };
         let Some(doc) = self.followed.doc() else {
             return applied;

@@ -6,6 +6,7 @@ use std::time::Duration;
 
 use shift_client::Client;
 use shift_client::robot::Applied;
+use shift_proto::WatchHealth;
 use shift_proto::keys::{KeySpace, Ros2Mapping};
 use tokio::sync::mpsc;
 
@@ -115,6 +116,9 @@ pub async fn run(opts: &RunOptions) -> Result<Report, SimError> {
         while let Ok((i, message)) = messages.try_recv() {
             match sim.robots[i].on_message(message) {
                 Applied::Gap { .. } => nets[i].request_plan(),
+                Applied::Watch {
+                    health: WatchHealth::Blocked,
+                } => sights[i].on_held(clock.wall_s()),
                 Applied::Correction { .. } => sights[i].on_correction(clock.wall_s()),
                 _ => {}
             }
@@ -132,7 +136,9 @@ pub async fn run(opts: &RunOptions) -> Result<Report, SimError> {
                     traffic.scans_sent += 1;
                     let r = &sim.robots[robot];
                     let ahead = r.path_ahead(window.window_radius_m);
-                    let news = news_on_path(r.seen(), &ahead, r.position(), r.spec.radius, window, &static_grid);
+                    // Known to the daemon already when it holds the plan's end at a blockage.
+                    let news = r.followed.watch() != Some(WatchHealth::Blocked)
+                        && news_on_path(r.seen(), &ahead, r.position(), r.spec.radius, window, &static_grid);
                     sights[robot].on_scan(clock.wall_s(), news);
                 }
             }
@@ -167,6 +173,8 @@ pub async fn run(opts: &RunOptions) -> Result<Report, SimError> {
     traffic.wall_s = clock.wall_s();
     traffic.correction_latency_ms = Quantiles::of(&latencies);
     traffic.sights_unanswered = sights.iter().map(|s| s.unanswered).sum();
+    let held: Vec<f64> = sights.iter().flat_map(|s| s.held_ms.iter().copied()).collect();
+    traffic.held_latency_ms = Quantiles::of(&held);
     report.traffic = traffic;
     for net in nets {
         net.close().await;

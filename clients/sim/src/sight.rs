@@ -72,6 +72,9 @@ pub struct SightClock {
     pub latencies_ms: Vec<f64>,
     /// Sights no correction followed within `patience_s`.
     pub unanswered: u64,
+    /// Sights the daemon answered by holding the plan's end (status `blocked`: the path is blocked to its end
+    /// and the end is held in case the blockage moves on), after this long, milliseconds.
+    pub held_ms: Vec<f64>,
 }
 
 impl SightClock {
@@ -82,6 +85,16 @@ impl SightClock {
             pending: None,
             latencies_ms: Vec::new(),
             unanswered: 0,
+            held_ms: Vec::new(),
+        }
+    }
+
+    /// The daemon said at wall time `now_s` that it holds the plan's end at a blockage: a deliberate answer
+    /// (the robot waits), not a correction; counted apart from the latencies.
+    pub fn on_held(&mut self, now_s: f64) {
+        self.expire(now_s);
+        if let Some(t0) = self.pending.take() {
+            self.held_ms.push((now_s - t0) * 1e3);
         }
     }
 
@@ -160,5 +173,12 @@ mod tests {
         assert_eq!(c.unanswered, 1);
         c.on_correction(22.6);
         assert_eq!(c.latencies_ms.len(), 1);
+        // Held at a blockage: answered, apart from the corrections.
+        c.on_scan(30.0, true);
+        c.on_held(30.02);
+        c.on_correction(30.5);
+        assert_eq!(c.latencies_ms.len(), 1, "a held sight is no correction's latency");
+        assert_eq!(c.held_ms.len(), 1);
+        assert!((c.held_ms[0] - 20.0).abs() < 1e-6, "{:?}", c.held_ms);
     }
 }

@@ -45,7 +45,7 @@ pub fn prometheus() -> Result<PrometheusHandle> {
     let latency = [
         0.0005, 0.001, 0.0025, 0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1.0, 2.5, 5.0, 10.0, 30.0, 60.0,
     ];
-    // Ingest latencies are milliseconds: finer buckets, so p50/p99 can be read off them.
+    // Ingest and engine-loop latencies are milliseconds: finer buckets, so p50/p99 can be read off them.
     let ingest = [
         0.0001, 0.00025, 0.0005, 0.00075, 0.001, 0.0015, 0.002, 0.003, 0.004, 0.005, 0.0075, 0.01, 0.015, 0.02, 0.03,
         0.05, 0.075, 0.1, 0.15, 0.25, 0.5, 1.0, 2.5, 5.0, 10.0,
@@ -55,6 +55,8 @@ pub fn prometheus() -> Result<PrometheusHandle> {
         .map_err(|e| err!("prometheus buckets: {e}"))?
         .set_buckets_for_metric(Matcher::Prefix("shift_ingest_".into()), &ingest)
         .map_err(|e| err!("prometheus ingest buckets: {e}"))?
+        .set_buckets_for_metric(Matcher::Prefix("shift_engine_".into()), &ingest)
+        .map_err(|e| err!("prometheus engine buckets: {e}"))?
         .install_recorder()
         .map_err(|e| err!("prometheus recorder: {e}"))?;
     *slot = Some(handle.clone());

@@ -47,8 +47,10 @@ impl CheckRunner {
             });
             match &outcome {
                 CheckOutcome::Correct(p) => {
-                    metrics::counter!("shift_corrections_total", "reason" => p.reason.as_str()).increment(1);
-                    tracing::info!(
+                    // A proposal: the engine decides whether it becomes a version (`shift_corrections_total`);
+                    // one held at a blockage is proposed again at every check.
+                    metrics::counter!("shift_check_proposals_total", "reason" => p.reason.as_str()).increment(1);
+                    tracing::debug!(
                         robot = job.robot,
                         plan_id = job.plan_id,
                         reason = p.reason.as_str(),
@@ -56,7 +58,7 @@ impl CheckRunner {
                         to = p.to,
                         iterations = p.iterations,
                         compute_us,
-                        "path correction"
+                        "path check proposes a correction"
                     );
                 }
                 CheckOutcome::Failed(why) => {

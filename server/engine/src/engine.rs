@@ -180,10 +180,13 @@ impl Engine {
 
     /// Number of plans per status.
     pub fn status_counts(&self) -> Vec<(PlanStatus, usize)> {
-        PlanStatus::ALL
-            .iter()
-            .map(|&s| (s, self.plans.values().filter(|r| r.status == s).count()))
-            .collect()
+        let mut counts = PlanStatus::ALL.map(|s| (s, 0));
+        for r in self.plans.values() {
+            if let Some(c) = counts.iter_mut().find(|(s, _)| *s == r.status) {
+                c.1 += 1;
+            }
+        }
+        counts.to_vec()
     }
 
     /// The site `r`'s sensor data feeds: its plan's site, else the default site.

@@ -369,7 +369,7 @@ class PlanInfo:
     missed: List[List[Point2]] = field(default_factory=list)
     corrections: int = 0
     watch: Optional[str] = None
-    """``watching`` or ``blind`` while a robot drives it."""
+    """``watching``, ``blind`` or ``blocked`` (the path is blocked to its end; the plan waits) while a robot drives it."""
     progress_jumps: List[ProgressJump] = field(default_factory=list)
 
     @classmethod

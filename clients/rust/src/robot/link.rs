@@ -3,7 +3,7 @@
 use std::time::Duration;
 
 use shift_proto::keys::KeySpace;
-use shift_proto::{CorrectionDoc, PlanDocument};
+use shift_proto::{CorrectionDoc, PlanDocument, PlanStatusResponse};
 use zenoh::handlers::FifoChannelHandler;
 use zenoh::pubsub::Subscriber;
 use zenoh::sample::Sample;
@@ -47,9 +47,13 @@ pub enum RobotMessage {
     Plan(PlanDocument),
     /// A correction of the plan.
     Correction(CorrectionDoc),
+    /// The status of a plan assigned to this robot (its watch health says e.g. `blocked`).
+    Status(Box<PlanStatusResponse>),
 }
 
-/// One robot's link to the fleet: subscribed to `{prefix}/{fleet}/robots/{robot}/plan` and `…/corrections`.
+/// One robot's link to the fleet: subscribed to `{prefix}/{fleet}/robots/{robot}/plan` and `…/corrections`,
+/// and to `{prefix}/{fleet}/plans/*/status` for the statuses of plans assigned to it (the server publishes
+/// statuses per plan; those of other robots' plans are dropped here).
 ///
 /// ```no_run
 /// # async fn run() -> shift_client::Result<()> {
@@ -74,6 +78,7 @@ pub struct RobotLink {
     robot: String,
     plans: Subscriber<FifoChannelHandler<Sample>>,
     corrections: Subscriber<FifoChannelHandler<Sample>>,
+    statuses: Subscriber<FifoChannelHandler<Sample>>,
     /// How long a gap's plan query waits for the answer.
     pub fetch_timeout: Duration,
 }
@@ -120,12 +125,14 @@ impl RobotLink {
             .map_err(|e| ClientError::InvalidInput(e.to_string()))?;
         let plans = session.declare_subscriber(plan_key).await.map_err(zerr)?;
         let corrections = session.declare_subscriber(corr_key).await.map_err(zerr)?;
+        let statuses = session.declare_subscriber(keys.all_plan_status()).await.map_err(zerr)?;
         Ok(Self {
             session,
             keys,
             robot: robot.to_owned(),
             plans,
             corrections,
+            statuses,
             fetch_timeout: Duration::from_secs(5),
         })
     }
@@ -149,18 +156,28 @@ impl RobotLink {
     /// match link.recv().await? {
     ///     RobotMessage::Plan(doc) => println!("plan {} v{}", doc.plan_id, doc.version),
     ///     RobotMessage::Correction(c) => println!("correction to v{}", c.version),
+    ///     RobotMessage::Status(s) => println!("plan {} is {:?}", s.plan_id, s.watch),
     /// }
     /// # Ok(()) }
     /// ```
     pub async fn recv(&self) -> Result<RobotMessage> {
-        tokio::select! {
-            s = self.plans.recv_async() => {
-                let sample = s.map_err(zerr)?;
-                decode(&sample, "a plan document").map(RobotMessage::Plan)
-            }
-            s = self.corrections.recv_async() => {
-                let sample = s.map_err(zerr)?;
-                decode(&sample, "a correction").map(RobotMessage::Correction)
+        loop {
+            tokio::select! {
+                s = self.plans.recv_async() => {
+                    let sample = s.map_err(zerr)?;
+                    return decode(&sample, "a plan document").map(RobotMessage::Plan);
+                }
+                s = self.corrections.recv_async() => {
+                    let sample = s.map_err(zerr)?;
+                    return decode(&sample, "a correction").map(RobotMessage::Correction);
+                }
+                s = self.statuses.recv_async() => {
+                    let sample = s.map_err(zerr)?;
+                    let status: PlanStatusResponse = decode(&sample, "a plan status")?;
+                    if status.robot.as_deref() == Some(self.robot.as_str()) {
+                        return Ok(RobotMessage::Status(Box::new(status)));
+                    }
+                }
             }
         }
     }
@@ -214,6 +231,7 @@ impl RobotLink {
                     have: followed.version(),
                 },
             },
+            RobotMessage::Status(status) => followed.on_status(&status),
         };
         if !matches!(applied, Applied::Gap { .. }) {
             return Ok(applied);

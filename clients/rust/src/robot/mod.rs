@@ -8,7 +8,7 @@ mod link;
 #[cfg(feature = "robot")]
 pub use link::{RobotLink, RobotMessage, peer_config};
 
-use shift_proto::{CorrectionDoc, CorrectionError, PlanDocument};
+use shift_proto::{CorrectionDoc, CorrectionError, PlanDocument, PlanStatusResponse, WatchHealth};
 
 /// What [`FollowedPlan`] did with a plan or correction.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -25,7 +25,14 @@ pub enum Applied {
         /// The version reached.
         version: u64,
     },
-    /// Old news: a plan or correction at or below the version held; nothing changed.
+    /// The plan's watch health changed (its status said so): `blocked` means the path is blocked to its end
+    /// and the server holds the plan's end for a while in case the blockage moves on; wait before it.
+    Watch {
+        /// The health now.
+        health: WatchHealth,
+    },
+    /// Old news: a plan or correction at or below the version held, or a status of another plan or with
+    /// nothing new; nothing changed.
     Stale,
     /// The correction does not follow the version held (`have`: none when no plan of its id is held): fetch
     /// the plan. The correction is kept and applied if a fetched plan is at its base version.
@@ -70,6 +77,7 @@ const MAX_HELD: usize = 64;
 pub struct FollowedPlan {
     doc: Option<PlanDocument>,
     held: Vec<CorrectionDoc>,
+    watch: Option<WatchHealth>,
 }
 
 impl FollowedPlan {
@@ -78,6 +86,42 @@ impl FollowedPlan {
         Self {
             doc: Some(doc),
             held: Vec::new(),
+            watch: None,
+        }
+    }
+
+    /// The watch health the plan's last status gave (`None` before one came, or after a new plan).
+    pub fn watch(&self) -> Option<WatchHealth> {
+        self.watch
+    }
+
+    /// Takes a plan status (the server publishes every plan's on `plans/{id}/status`): the followed plan's
+    /// watch health is kept; other plans' statuses are [`Applied::Stale`].
+    ///
+    /// ```
+    /// use shift_client::robot::{Applied, FollowedPlan};
+    /// use shift_client::proto::{PlanDocument, PlanMetricsDoc, PlanStatusResponse, WatchHealth};
+    /// let doc = PlanDocument { plan_id: "p-1".into(), version: 1, frame: "map".into(), waypoints: vec![],
+    ///     regions: vec![], metrics: PlanMetricsDoc::default() };
+    /// let status = |plan_id: &str, watch: WatchHealth| -> PlanStatusResponse {
+    ///     serde_json::from_value(serde_json::json!({ "plan_id": plan_id, "site": "s", "status": "active",
+    ///         "progress": 1.0, "version": 1, "regions_ready": 1, "watch": watch, "created_ms": 0,
+    ///         "updated_ms": 0 })).unwrap()
+    /// };
+    /// let mut followed = FollowedPlan::new(doc);
+    /// assert_eq!(followed.on_status(&status("p-1", WatchHealth::Blocked)), Applied::Watch { health: WatchHealth::Blocked });
+    /// assert_eq!(followed.on_status(&status("p-1", WatchHealth::Blocked)), Applied::Stale);
+    /// assert_eq!(followed.on_status(&status("p-2", WatchHealth::Watching)), Applied::Stale);
+    /// assert_eq!(followed.watch(), Some(WatchHealth::Blocked));
+    /// ```
+    pub fn on_status(&mut self, status: &PlanStatusResponse) -> Applied {
+        let ours = self.doc.as_ref().is_some_and(|d| d.plan_id == status.plan_id);
+        match status.watch {
+            Some(health) if ours && self.watch != Some(health) => {
+                self.watch = Some(health);
+                Applied::Watch { health }
+            }
+            _ => Applied::Stale,
         }
     }
 
@@ -109,6 +153,9 @@ impl FollowedPlan {
         self.held
             .retain(|c| c.plan_id == doc.plan_id && c.version > doc.version);
         let plan_id = doc.plan_id.clone();
+        if self.doc.as_ref().is_none_or(|d| d.plan_id != plan_id) {
+            self.watch = None;
+        }
         self.doc = Some(doc);
         self.apply_held();
         Applied::Plan {

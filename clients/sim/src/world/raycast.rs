@@ -69,9 +69,21 @@ mod tests {
 
     /// Brute force: march in steps of a micrometre-scale fraction of a cell and report the first solid cell.
     fn oracle(g: &GridGeometry, solid: &[bool], o: Point2, d: (f64, f64), max: f64) -> Option<f64> {
-        let step = g.resolution / 2000.0;
-        let mut t = 0.0;
-        while t <= max {
+        march(g, solid, o, d, 0.0, max, g.resolution / 2000.0)
+    }
+
+    /// The first solid cell met marching from `from` to `to` along the ray in steps of `step`.
+    fn march(
+        g: &GridGeometry,
+        solid: &[bool],
+        o: Point2,
+        d: (f64, f64),
+        from: f64,
+        to: f64,
+        step: f64,
+    ) -> Option<f64> {
+        let mut t = from;
+        while t <= to {
             let p = Point2::new(o.x + d.0 * t, o.y + d.1 * t);
             if let Some(c) = g.locate(p)
                 && solid[g.index(c)]
@@ -109,7 +121,12 @@ mod tests {
             let want = oracle(&g, &cells, o, d, 3.0);
             match (got, want) {
                 (Some(a), Some(b)) => prop_assert!((a - b).abs() <= g.resolution / 1000.0, "{a} vs {b}"),
-                // A ray grazing a cell corner may be judged either way by the march.
+                // A ray grazing a cell corner crosses it over less than the march's step: the march misses what
+                // the traversal hits. A march a million times finer round the hit must find it.
+                (Some(a), None) => {
+                    let fine = march(&g, &cells, o, d, a - 1e-6, a + 1e-6, 1e-10);
+                    prop_assert!(fine.is_some() || a > 2.999, "{a} vs none, none finer either");
+                }
                 (a, b) => prop_assert!(a.is_none() && b.is_none() || a.or(b).is_some_and(|t| t > 2.999), "{a:?} vs {b:?}"),
             }
         }

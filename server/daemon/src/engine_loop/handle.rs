@@ -1,6 +1,8 @@
 //! How adapters talk to the engine loop: its message type and a cloneable handle. A leaf: HTTP handlers, the
 //! Zenoh fleet, plan jobs, path checks and the ingest import this module and nothing else of the loop.
 
+use std::time::Instant;
+
 use shift_engine::{EngineError, Event, PlanRecord};
 use shift_proto::SiteSummary;
 use tokio::sync::{mpsc, oneshot, watch};
@@ -40,6 +42,8 @@ pub enum Msg {
         event: Box<Event>,
         /// Where to answer.
         reply: Option<oneshot::Sender<Result<Reply, LoopError>>>,
+        /// When it was sent (the loop measures how long events wait in the inbox).
+        sent: Instant,
     },
     /// Stop every running job (shutdown after the grace period); they go back to the queue.
     InterruptJobs,
@@ -53,6 +57,7 @@ impl Msg {
         Self::Event {
             event: Box::new(event),
             reply: None,
+            sent: Instant::now(),
         }
     }
 }
@@ -77,6 +82,7 @@ impl EngineHandle {
             .send(Msg::Event {
                 event: Box::new(event),
                 reply: Some(reply),
+                sent: Instant::now(),
             })
             .await
             .map_err(|_| LoopError::Stopped)?;

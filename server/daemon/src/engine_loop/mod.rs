@@ -8,6 +8,7 @@ pub mod durability;
 pub mod handle;
 
 use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
 
 use shift_engine::sensors::SensorHub;
 use shift_engine::{Command, Engine, Event, LiveMaps};
@@ -24,6 +25,9 @@ use crate::record::Recorder;
 use crate::store::{Store, Write};
 use crate::views::Views;
 use crate::watch::CheckRunner;
+
+/// The loop's gauges are set at most this often (a scrape every few seconds sees them fresh).
+const GAUGES_EVERY: Duration = Duration::from_millis(250);
 
 /// What the engine loop works with besides the engine itself.
 pub struct LoopParts {
@@ -64,6 +68,8 @@ pub fn spawn(engine: Engine, parts: LoopParts) -> std::io::Result<(EngineHandle,
         checks,
         running: running_tx,
         durability: Durability::default(),
+        gauges_at: None,
+        plans_changed: false,
     };
     let thread = std::thread::Builder::new()
         .name("engine".into())
@@ -78,6 +84,10 @@ struct EngineLoop {
     checks: CheckRunner,
     running: watch::Sender<usize>,
     durability: Durability,
+    /// When the gauges were last set.
+    gauges_at: Option<Instant>,
+    /// A plan record was stored since (its status, the queue or the running jobs may have changed).
+    plans_changed: bool,
 }
 
 impl EngineLoop {
@@ -86,7 +96,11 @@ impl EngineLoop {
             match msg {
                 Msg::Stop => break,
                 Msg::InterruptJobs => self.jobs.interrupt_all(),
-                Msg::Event { event, reply } => {
+                Msg::Event { event, reply, sent } => {
+                    let kind = event.kind();
+                    let started = Instant::now();
+                    metrics::histogram!("shift_engine_wait_seconds")
+                        .record(started.saturating_duration_since(sent).as_secs_f64());
                     let finished = match event.as_ref() {
                         Event::JobFinished { plan_id, .. } => Some(plan_id.clone()),
                         _ => None,
@@ -96,6 +110,8 @@ impl EngineLoop {
                         self.jobs.finished(&id);
                     }
                     self.export_gauges();
+                    metrics::histogram!("shift_engine_event_seconds", "event" => kind)
+                        .record(started.elapsed().as_secs_f64());
                     match (reply, result) {
                         (Some(r), res) => {
                             let _ = r.send(res);
@@ -193,6 +209,7 @@ impl EngineLoop {
                     reply.sites.push(summary);
                 }
                 Command::StorePlan(rec) => {
+                    self.plans_changed = true;
                     p.views.set_record(rec.clone());
                     reply.plans.push(rec);
                 }
@@ -200,20 +217,45 @@ impl EngineLoop {
                 Command::StoreResult { plan_id, doc } => {
                     p.views.set_doc(&plan_id, doc);
                 }
-                Command::StartJob(job) => self.jobs.start(job),
-                Command::CancelJob { plan_id } => self.jobs.cancel(&plan_id),
+                Command::StartJob(job) => {
+                    self.plans_changed = true;
+                    self.jobs.start(job);
+                }
+                Command::CancelJob { plan_id } => {
+                    self.plans_changed = true;
+                    self.jobs.cancel(&plan_id);
+                }
                 Command::PublishPlan { robot, doc } => match &p.publisher {
                     Some(publisher) => publisher.plan(&robot, doc),
                     None => tracing::warn!(robot, "zenoh is disabled: the plan is only served over HTTP"),
                 },
                 Command::RobotChanged(view) => p.views.set_robot(view),
-                Command::ForgetPlan { plan_id } => p.views.forget_plan(&plan_id),
+                Command::ForgetPlan { plan_id } => {
+                    self.plans_changed = true;
+                    p.views.forget_plan(&plan_id);
+                }
                 Command::SiteStatic { site, clearance, grid } => {
                     p.views.set_site_map(&site, grid);
                     p.live.set_static(&site, clearance);
                 }
                 Command::StartCheck(job) => self.checks.start(*job),
-                Command::StoreCorrection { record, doc, .. } => {
+                Command::StoreCorrection {
+                    record,
+                    doc,
+                    correction,
+                } => {
+                    // A check's proposal became a version (proposals held or stale are not counted).
+                    metrics::counter!("shift_corrections_total", "reason" => correction.reason.as_str()).increment(1);
+                    tracing::info!(
+                        robot = correction.robot,
+                        plan_id = correction.plan_id,
+                        version = correction.version,
+                        reason = correction.reason.as_str(),
+                        from = correction.from,
+                        to = correction.to,
+                        compute_us = correction.compute_us,
+                        "path corrected"
+                    );
                     p.views.set_doc(&record.plan_id, doc);
                     p.views.set_record(record.clone());
                     reply.plans.push(record);
@@ -247,14 +289,20 @@ impl EngineLoop {
         reply
     }
 
+    /// The running-jobs watch after every event; the gauges when a plan record changed, else at most every
+    /// [`GAUGES_EVERY`] (counting plans by status walks every plan held, and odometry brings thousands of events
+    /// a second, most of which change no plan's status).
     fn export_gauges(&mut self) {
-        for (status, n) in self.engine.status_counts() {
-            metrics::gauge!("shift_plans", "status" => status.as_str()).set(n as f64);
+        if std::mem::take(&mut self.plans_changed) || self.gauges_at.is_none_or(|t| t.elapsed() >= GAUGES_EVERY) {
+            self.gauges_at = Some(Instant::now());
+            for (status, n) in self.engine.status_counts() {
+                metrics::gauge!("shift_plans", "status" => status.as_str()).set(n as f64);
+            }
+            metrics::gauge!("shift_plan_queue_depth").set(self.engine.queue_depth() as f64);
+            metrics::gauge!("shift_plan_jobs_running").set(self.engine.running() as f64);
+            metrics::gauge!("shift_store_ok").set(if self.durability.fault().is_none() { 1.0 } else { 0.0 });
+            metrics::gauge!("shift_store_deferred").set(self.durability.deferred() as f64);
         }
-        metrics::gauge!("shift_plan_queue_depth").set(self.engine.queue_depth() as f64);
-        metrics::gauge!("shift_plan_jobs_running").set(self.engine.running() as f64);
-        metrics::gauge!("shift_store_ok").set(if self.durability.fault().is_none() { 1.0 } else { 0.0 });
-        metrics::gauge!("shift_store_deferred").set(self.durability.deferred() as f64);
         let running = self.engine.running();
         self.running.send_if_modified(|r| {
             let changed = *r != running;

@@ -142,6 +142,26 @@ pub enum Event {
 }
 
 impl Event {
+    /// The event's name, for metrics and logs.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Self::Restore { .. } => "restore",
+            Self::MapUploaded { .. } => "map_uploaded",
+            Self::PlanRequested { .. } => "plan_requested",
+            Self::CancelRequested { .. } => "cancel_requested",
+            Self::JobProgress { .. } => "job_progress",
+            Self::JobRegionReady { .. } => "job_region_ready",
+            Self::JobFinished { .. } => "job_finished",
+            Self::RobotLiveliness { .. } => "robot_liveliness",
+            Self::RobotPose { .. } => "robot_pose",
+            Self::AssignPlan { .. } => "assign_plan",
+            Self::MapChanged { .. } => "map_changed",
+            Self::SiteFed { .. } => "site_fed",
+            Self::CheckFinished { .. } => "check_finished",
+            Self::Shutdown => "shutdown",
+        }
+    }
+
     /// A client's request (an HTTP call waits for its answer): when the store cannot commit what it decided,
     /// the request is undone and refused. Everything else is a fact the fleet already lived through; what it
     /// decided stands, and its durable part waits for the store.

@@ -163,7 +163,7 @@ impl Engine {
                 }
             }
         }
-        self.blindness(robot, now_ms, out);
+        self.watch_health(robot, now_ms, out);
         self.robot_changed(robot, out);
         let Some(r) = self.robots.get(robot) else { return };
         // A robot found elsewhere on its plan has a new window ahead: look at it now.
@@ -184,13 +184,13 @@ impl Engine {
             .map(|r| r.id.clone())
             .collect();
         for robot in robots {
-            self.blindness(&robot, now_ms, out);
+            self.watch_health(&robot, now_ms, out);
         }
     }
 
     /// Flags `robot`'s plan `blind` when its site's live map got no points for `blind_after_ms` while the robot
-    /// is alive, and `watching` again once points come.
-    fn blindness(&mut self, robot: &str, now_ms: u64, out: &mut Vec<Command>) {
+    /// is alive, `blocked` while a check's proposal to end the plan is held, and `watching` otherwise.
+    fn watch_health(&mut self, robot: &str, now_ms: u64, out: &mut Vec<Command>) {
         let Some(r) = self.robots.get(robot) else { return };
         let Some(a) = &r.assignment else { return };
         let Some(rec) = self.plans.get_mut(&a.plan_id) else {
@@ -204,6 +204,8 @@ impl Engine {
         let blind = r.alive && now_ms.saturating_sub(since) > self.config.blind_after_ms;
         let want = if blind {
             WatchHealth::Blind
+        } else if r.watch.end_proposed_since_ms.is_some() {
+            WatchHealth::Blocked
         } else {
             WatchHealth::Watching
         };
@@ -382,6 +384,8 @@ impl Engine {
             CheckOutcome::Correct(_) => again = true,
             CheckOutcome::Clear | CheckOutcome::Failed(_) => {}
         }
+        // A hold began or ended: the plan's status says so.
+        self.watch_health(robot, now_ms, out);
         if again {
             self.check(robot, Trigger::MapChange, now_ms, out);
         }

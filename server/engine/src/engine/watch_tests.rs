@@ -4,7 +4,9 @@
 use std::sync::Arc;
 
 use proptest::prelude::*;
-use shift_proto::{CorrectionDoc, CorrectionReason, PlanDocument, PlanMetricsDoc, WaypointDoc, WaypointKindDoc};
+use shift_proto::{
+    CorrectionDoc, CorrectionReason, PlanDocument, PlanEvent, PlanMetricsDoc, WatchHealth, WaypointDoc, WaypointKindDoc,
+};
 
 use super::tests::{engine, request};
 use super::*;
@@ -233,13 +235,15 @@ fn an_end_of_plan_at_a_blockage_waits_until_the_blockage_has_stood_its_hold() {
     let (mut e, _) = assigned();
     let hold_ms = (WatchParams::default().end_hold_s * 1e3) as u64;
     // Blocked at 1 s and still at 5 s: held; cleared at 6 s (the walker went): the hold starts again.
-    for (t, outcome, expect) in [
-        (1_000, ending_skip(), 0),
-        (5_000, ending_skip(), 0),
-        (6_000, CheckOutcome::Clear, 0),
-        (7_000, ending_skip(), 0),
-        (7_000 + hold_ms - 300, ending_skip(), 0),
-        (7_000 + hold_ms, ending_skip(), 1),
+    // While held the plan's status says `blocked` (published when it begins and ends), else `watching`.
+    use WatchHealth::{Blocked, Watching};
+    for (t, outcome, expect, health, health_published) in [
+        (1_000, ending_skip(), 0, Blocked, true),
+        (5_000, ending_skip(), 0, Blocked, false),
+        (6_000, CheckOutcome::Clear, 0, Watching, true),
+        (7_000, ending_skip(), 0, Blocked, true),
+        (7_000 + hold_ms - 300, ending_skip(), 0, Blocked, false),
+        (7_000 + hold_ms, ending_skip(), 1, Watching, true),
     ] {
         assert_eq!(
             checks(&e.handle(pose(0.5), t).expect("pose")).len(),
@@ -248,6 +252,11 @@ fn an_end_of_plan_at_a_blockage_waits_until_the_blockage_has_stood_its_hold() {
         );
         let cmds = e.handle(finished(1, outcome), t).expect("done");
         assert_eq!(published(&cmds), expect, "at {t} ms");
+        assert_eq!(e.plan("p-1").and_then(|p| p.watch), Some(health), "at {t} ms");
+        let said = cmds
+            .iter()
+            .any(|c| matches!(c, Command::Publish(PlanEvent::Status(s)) if s.watch == Some(health)));
+        assert_eq!(said, health_published, "status {health:?} published at {t} ms");
     }
     assert_eq!(
         e.plan("p-1").map(|p| p.version),
