@@ -31,6 +31,7 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, anyhow, bail};
+use clap::Parser;
 use serde_json::{Value, json};
 use shift_proto::ros::odometry::encode_odometry;
 use shift_proto::ros::point_cloud2::encode_point_cloud2_xyz;
@@ -61,47 +62,46 @@ const CLOUD_SET: usize = 3;
 /// A correction this long after an obstacle cloud is no longer that obstacle's.
 const CORRECTION_WAIT: Duration = Duration::from_secs(2);
 
+/// Fleet load on loopback; see the module docs.
+#[derive(Parser)]
 struct Args {
+    /// Robots, each its own Zenoh session.
+    #[arg(long, default_value_t = 30, value_parser = at_least_one)]
     robots: usize,
+    /// Seconds the fleet drives.
+    #[arg(long, default_value_t = 30)]
     seconds: u64,
+    /// Points per cloud.
+    #[arg(long, default_value_t = 30_000)]
     points: usize,
+    /// Odometry rate per robot, Hz.
+    #[arg(long, default_value_t = 10.0, value_parser = positive)]
     odom_hz: f64,
+    /// Cloud rate per robot, Hz.
+    #[arg(long, default_value_t = 5.0, value_parser = positive)]
     cloud_hz: f64,
+    /// Seconds between a robot's obstacle clouds.
+    #[arg(long = "obstacle-every", default_value_t = 3.0, value_parser = positive)]
     obstacle_every_s: f64,
+    /// Put clouds with congestion control `Block` instead of `Drop`.
+    #[arg(long)]
     block: bool,
 }
 
-fn args() -> Result<Args> {
-    let mut a = Args {
-        robots: 30,
-        seconds: 30,
-        points: 30_000,
-        odom_hz: 10.0,
-        cloud_hz: 5.0,
-        obstacle_every_s: 3.0,
-        block: false,
-    };
-    let mut it = std::env::args().skip(1);
-    while let Some(k) = it.next() {
-        if k == "--block" {
-            a.block = true;
-            continue;
-        }
-        let v = it.next().with_context(|| format!("{k} needs a value"))?;
-        match k.as_str() {
-            "--robots" => a.robots = v.parse()?,
-            "--seconds" => a.seconds = v.parse()?,
-            "--points" => a.points = v.parse()?,
-            "--odom-hz" => a.odom_hz = v.parse()?,
-            "--cloud-hz" => a.cloud_hz = v.parse()?,
-            "--obstacle-every" => a.obstacle_every_s = v.parse()?,
-            _ => bail!("unknown argument {k}"),
-        }
+/// A count of one or more.
+fn at_least_one(v: &str) -> Result<usize, String> {
+    match v.parse::<usize>() {
+        Ok(n) if n >= 1 => Ok(n),
+        _ => Err(format!("{v:?} is not a count of one or more")),
     }
-    if a.robots == 0 || a.odom_hz <= 0.0 || a.cloud_hz <= 0.0 || a.obstacle_every_s <= 0.0 {
-        bail!("--robots, --odom-hz, --cloud-hz and --obstacle-every must be positive");
+}
+
+/// A finite number above zero.
+fn positive(v: &str) -> Result<f64, String> {
+    match v.parse::<f64>() {
+        Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
+        _ => Err(format!("{v:?} is not a positive number")),
     }
-    Ok(a)
 }
 
 /// The static map: free rooms of ROOM_M with walls (the cells within one cell of every wall line, the site's
@@ -384,7 +384,7 @@ async fn clouds(
 
 #[tokio::main(flavor = "multi_thread")]
 async fn main() -> Result<()> {
-    let args = args()?;
+    let args = Args::parse();
     let _ = tracing_subscriber::fmt()
         .with_env_filter(tracing_subscriber::EnvFilter::new("error"))
         .try_init();

@@ -19,7 +19,8 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::{Result, anyhow, bail};
+use clap::Parser;
 use serde_json::json;
 use shift_proto::ros::point_cloud2::encode_point_cloud2_xyz;
 use shift_proto::ros::{Header, Time};
@@ -39,32 +40,21 @@ const ROOMS: Rooms = Rooms {
     room_m: ROOM_M,
 };
 
+/// Cloud ingest on loopback; see the module docs.
+#[derive(Parser)]
 struct Args {
+    /// Seconds of the rate phase.
+    #[arg(long, default_value_t = 20)]
     seconds: u64,
+    /// Seconds of the max-rate phase.
+    #[arg(long, default_value_t = 10)]
     max_seconds: u64,
+    /// Points per cloud.
+    #[arg(long, default_value_t = 30_000)]
     points: usize,
+    /// Cloud rate per robot in the rate phase, Hz.
+    #[arg(long, default_value_t = 10.0)]
     hz: f64,
-}
-
-fn args() -> Result<Args> {
-    let mut a = Args {
-        seconds: 20,
-        max_seconds: 10,
-        points: 30_000,
-        hz: 10.0,
-    };
-    let mut it = std::env::args().skip(1);
-    while let Some(k) = it.next() {
-        let v = it.next().with_context(|| format!("{k} needs a value"))?;
-        match k.as_str() {
-            "--seconds" => a.seconds = v.parse()?,
-            "--max-seconds" => a.max_seconds = v.parse()?,
-            "--points" => a.points = v.parse()?,
-            "--hz" => a.hz = v.parse()?,
-            _ => bail!("unknown argument {k}"),
-        }
-    }
-    Ok(a)
 }
 
 /// The robot's position at `t` seconds: r1 along the rooms' middle row, r2 along the middle column, 1 m/s.
@@ -195,7 +185,7 @@ async fn phase(
 
 #[tokio::main(flavor = "multi_thread")]
 async fn main() -> Result<()> {
-    let args = args()?;
+    let args = Args::parse();
     let _ = tracing_subscriber::fmt()
         .with_env_filter(tracing_subscriber::EnvFilter::new("warn"))
         .try_init();

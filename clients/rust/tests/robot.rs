@@ -186,7 +186,10 @@ async fn a_robot_follows_its_plan_and_a_correction_and_tail_prints_it() -> Resul
             .any(|s| s.plan_id == id && s.watch == Some(WatchHealth::Watching)),
         "{statuses:?}"
     );
-    assert!(statuses.iter().all(|s| s.robot.as_deref() == Some("r1")), "only r1's plans");
+    assert!(
+        statuses.iter().all(|s| s.robot.as_deref() == Some("r1")),
+        "only r1's plans"
+    );
 
     // shiftctl printed the first correction, exactly.
     let mut stdout = tail.0.stdout.take().context("stdout")?;

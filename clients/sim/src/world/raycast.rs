@@ -73,15 +73,7 @@ mod tests {
     }
 
     /// The first solid cell met marching from `from` to `to` along the ray in steps of `step`.
-    fn march(
-        g: &GridGeometry,
-        solid: &[bool],
-        o: Point2,
-        d: (f64, f64),
-        from: f64,
-        to: f64,
-        step: f64,
-    ) -> Option<f64> {
+    fn march(g: &GridGeometry, solid: &[bool], o: Point2, d: (f64, f64), from: f64, to: f64, step: f64) -> Option<f64> {
         let mut t = from;
         while t <= to {
             let p = Point2::new(o.x + d.0 * t, o.y + d.1 * t);
