@@ -205,3 +205,75 @@ async fn a_closed_corridor_is_skipped_not_driven_through() -> Result<()> {
     robot.session.close().await.map_err(|e| anyhow!("{e}"))?;
     server.stop().await
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_end_of_plan_behind_a_blockage_is_held_and_said_blocked_then_sent() -> Result<()> {
+    // An open 8 m × 4 m room; the last metre of the plan is covered by obstacle points, so nothing of the plan
+    // beyond the blockage can be rejoined: the only repair ends the plan where the robot stands.
+    let (server, robot, doc, id, _dir) = planned("room", room_grid(160, 80, 0.05, &[]), [0.5, 0.5]).await?;
+    let w = &doc.waypoints;
+    let mut s = vec![0.0];
+    for p in w.windows(2) {
+        s.push(s[s.len() - 1] + (p[1].x - p[0].x).hypot(p[1].y - p[0].y));
+    }
+    let total = s[s.len() - 1];
+    ensure!(total > 6.0, "a plan long enough: {total} m");
+    let stand = s.iter().rposition(|&d| d <= total - 3.0).context("a place to stand")?;
+    // Points every 5 cm along the last metre of the path, 0.1-0.5 m high.
+    let mut end = Vec::new();
+    for k in s.iter().position(|&d| d >= total - 1.0).context("the last metre")?..w.len() - 1 {
+        let (a, b) = (&w[k], &w[k + 1]);
+        let n = ((s[k + 1] - s[k]) / 0.05).ceil().max(1.0) as usize;
+        for i in 0..=n {
+            let f = i as f64 / n as f64;
+            for z in [0.1f32, 0.3, 0.5] {
+                end.push([(a.x + f * (b.x - a.x)) as f32, (a.y + f * (b.y - a.y)) as f32, z]);
+            }
+        }
+    }
+    for k in (0..stand).step_by(4) {
+        robot.odom("r1", w[k].x, w[k].y, 0.0).await?;
+    }
+    let (a, b) = (&w[stand], &w[stand + 1]);
+    let yaw = (b.y - a.y).atan2(b.x - a.x);
+    for _ in 0..3 {
+        robot.odom("r1", a.x, a.y, yaw).await?;
+        tokio::time::sleep(Duration::from_millis(30)).await;
+    }
+    // The robot stands, streaming odometry and seeing the blockage, as robots do.
+    let seen = Instant::now();
+    let until = seen + LONG;
+    let mut blocked_at = None;
+    let mut tick = 0u32;
+    let c = loop {
+        robot.odom("r1", a.x, a.y, yaw).await?;
+        if tick.is_multiple_of(5) {
+            robot.cloud("r1", &end).await?;
+        }
+        tick += 1;
+        let (_, st) = server.get(&format!("/v1/plans/{id}")).await?;
+        if blocked_at.is_none() && st["watch"] == "blocked" {
+            blocked_at = Some(seen.elapsed());
+        }
+        if let Ok(c) = robot.next_correction(Duration::from_millis(100)).await {
+            break c;
+        }
+        ensure!(Instant::now() < until, "no correction within {LONG:?}");
+    };
+    let sent_at = seen.elapsed();
+    assert_eq!(
+        (c.reason, c.to, c.waypoints.len() <= 1),
+        (CorrectionReason::Skipped, w.len(), true),
+        "the correction ends the plan: {c:?}"
+    );
+    let blocked_at = blocked_at.context("the plan's status never said blocked")?;
+    assert!(
+        blocked_at < sent_at && sent_at >= END_HOLD,
+        "blocked at {blocked_at:?}, the end sent at {sent_at:?}: it must be said at once and sent after the hold"
+    );
+    // Sent: the plan is no longer held.
+    let (_, st) = server.get(&format!("/v1/plans/{id}")).await?;
+    assert_ne!(st["watch"], "blocked", "{st}");
+    robot.session.close().await.map_err(|e| anyhow!("{e}"))?;
+    server.stop().await
+}

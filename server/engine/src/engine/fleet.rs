@@ -332,6 +332,10 @@ impl Engine {
                 r.watch.end_proposed_since_ms = None;
                 let Some(a) = r.assignment.as_mut() else { return };
                 let Some(rec) = self.plans.get_mut(plan_id) else { return };
+                // No longer held: the record stored and published with the correction says so.
+                if rec.watch == Some(WatchHealth::Blocked) {
+                    rec.watch = Some(WatchHealth::Watching);
+                }
                 let correction = CorrectionDoc {
                     plan_id: plan_id.to_owned(),
                     robot: robot.to_owned(),
