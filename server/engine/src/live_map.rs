@@ -273,6 +273,14 @@ impl LiveMap {
     pub fn stats(&self) -> LiveMapStats {
         self.stats
     }
+
+    /// Heap bytes held: the tree's ([`IkdTree::memory_bytes`]) and the voxels' last-seen times (buckets of key,
+    /// time and hashbrown's control byte, by capacity: what the allocator holds). The static map's distance field
+    /// is shared with the site and not counted.
+    pub fn memory_bytes(&self) -> usize {
+        let bucket = size_of::<VoxelKey>() + size_of::<u64>() + 1;
+        self.tree.memory_bytes() + self.seen.capacity() * bucket
+    }
 }
 
 #[cfg(test)]
@@ -292,6 +300,25 @@ mod tests {
             10.0,
         )
         .expect("valid params")
+    }
+
+    #[test]
+    fn memory_follows_the_points_held_and_counts_the_voxel_times() {
+        let mut m = map();
+        let empty = m.memory_bytes();
+        assert!(empty >= m.tree().memory_bytes());
+        let points: Vec<[f64; 3]> = (0..80)
+            .map(|i| [0.5 + 0.1 * f64::from(i % 9), 0.5 + 0.1 * f64::from(i / 9), 0.5])
+            .collect();
+        m.ingest(&points, false, 0);
+        let full = m.memory_bytes();
+        let voxels = m.seen.len() * (size_of::<VoxelKey>() + size_of::<u64>());
+        assert!(
+            full >= m.tree().memory_bytes() + voxels,
+            "{full} bytes for {} voxels",
+            m.seen.len()
+        );
+        assert!(full > empty, "{empty} → {full}");
     }
 
     #[test]

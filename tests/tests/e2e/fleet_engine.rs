@@ -258,6 +258,14 @@ async fn obstacle_on_the_plans_site(sensor: Sensor, layout: Layout) -> Result<()
         0,
         "the default site got none of it"
     );
+    // The live map's heap is reported per site.
+    let metrics = server.http.get(server.url("/metrics")).send().await?.text().await?;
+    let bytes = metrics
+        .lines()
+        .find_map(|l| l.strip_prefix("shift_live_map_bytes{site=\"hall\"} "))
+        .and_then(|v| v.parse::<f64>().ok())
+        .context("shift_live_map_bytes of hall in the metrics")?;
+    assert!(bytes > 0.0, "{bytes}");
     let (_, r) = server.get("/v1/robots/r1").await?;
     assert_eq!(r["site"], "hall", "{r}");
     assert!(r["sensors"]["placed"].as_u64().unwrap_or(0) >= 1, "{r}");

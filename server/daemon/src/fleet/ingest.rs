@@ -335,7 +335,7 @@ impl Ingest {
         let Some(live) = self.live.get_or_create(&summary, self.params) else {
             return Err(no_map(format!("site {:?}: its live map could not be created", p.site)));
         };
-        let (report, points_in_map) = match live.map.write() {
+        let (report, points_in_map, map_bytes) = match live.map.write() {
             Ok(mut map) => {
                 // What the scan saw through first: its own returns are never cleared by it.
                 if let Some(sweep) = &p.sweep {
@@ -347,7 +347,7 @@ impl Ingest {
                     live.last_expire_ms.store(now, Ordering::Relaxed);
                     map.expire(now);
                 }
-                (r, map.stats().points)
+                (r, map.stats().points, map.memory_bytes())
             }
             Err(_) => return Err(Dropped::internal(&p.robot, p.stream, "live map lock poisoned".into())),
         };
@@ -388,6 +388,7 @@ impl Ingest {
             }
         }
         metrics::gauge!("shift_live_map_points", "site" => p.site.clone()).set(points_in_map as f64);
+        metrics::gauge!("shift_live_map_bytes", "site" => p.site.clone()).set(map_bytes as f64);
         Ok(())
     }
 
