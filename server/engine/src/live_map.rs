@@ -382,15 +382,7 @@ mod tests {
 
     /// The sweep of a laser at (2, 3) facing +x whose rays start at `angle_min`, `increment` apart.
     fn sweep_from_2_3(ranges: Vec<f32>, angle_min: f32, increment: f32) -> Sweep {
-        let scan = shift_proto::ros::LaserScan {
-            angle_min,
-            angle_max: angle_min + increment * (ranges.len() as f32 - 1.0),
-            angle_increment: increment,
-            range_min: 0.1,
-            range_max: 10.0,
-            ranges,
-            ..shift_proto::ros::LaserScan::default()
-        };
+        let scan = crate::sensors::sweep::test_scan(ranges, angle_min, increment);
         let pose = crate::robots::Pose2 {
             x: 2.0,
             y: 3.0,

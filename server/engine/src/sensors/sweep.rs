@@ -107,23 +107,26 @@ impl Sweep {
     }
 }
 
+/// A test scan: `ranges` from `angle_min`, `increment` apart, valid between 0.1 and 10 m.
+#[cfg(test)]
+pub(crate) fn test_scan(ranges: Vec<f32>, angle_min: f32, increment: f32) -> LaserScan {
+    LaserScan {
+        angle_min,
+        angle_max: angle_min + increment * (ranges.len() as f32 - 1.0),
+        angle_increment: increment,
+        range_min: 0.1,
+        range_max: 10.0,
+        ranges,
+        ..LaserScan::default()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use std::f32::consts::PI;
 
+    use super::test_scan as scan;
     use super::*;
-
-    fn scan(ranges: Vec<f32>, angle_min: f32, increment: f32) -> LaserScan {
-        LaserScan {
-            angle_min,
-            angle_max: angle_min + increment * (ranges.len() as f32 - 1.0),
-            angle_increment: increment,
-            range_min: 0.1,
-            range_max: 10.0,
-            ranges,
-            ..LaserScan::default()
-        }
-    }
 
     fn at(x: f64, y: f64, yaw: f64) -> Pose2 {
         Pose2 { x, y, yaw, stamp_ns: 0 }
