@@ -13,6 +13,7 @@
 pub mod baseline;
 pub mod correct;
 pub mod decompose;
+pub mod divide;
 pub mod error;
 pub mod geom;
 pub mod link;

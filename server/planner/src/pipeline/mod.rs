@@ -2,6 +2,7 @@
 //! decompose → pattern per region → targeted passes → region routes → visiting order → links → metrics.
 
 mod assemble;
+pub mod fleet;
 pub mod objective;
 pub use objective::Objective;
 mod portfolio;

@@ -177,6 +177,34 @@ impl CoverageSpace {
         Self::new(OccupancyGrid::new(geometry, cells)?, self.robot, self.start)
     }
 
+    /// This space confined to a part of it (a fleet robot's share, see [`crate::divide`]): the robot's centre
+    /// stays on the reachable cells in `keep_reachable` connected to the start, and only the coverable cells
+    /// in `keep_coverable` within tool_width / 2 of those are to be covered. The start stays where it is;
+    /// when its cell is not kept, nothing is reachable and nothing coverable.
+    pub fn confined(&self, keep_reachable: &[bool], keep_coverable: &[bool]) -> Self {
+        let g = *self.geometry();
+        let kept: Vec<bool> = (0..g.len())
+            .map(|i| self.reachable[i] && keep_reachable.get(i).copied().unwrap_or(false))
+            .collect();
+        let reachable = flood_fill8(&g, &kept, self.start_cell);
+        let to_reachable = DistanceField::compute(g, |i| reachable[i], false);
+        let half = self.robot.tool_width_m / 2.0 + 1e-9;
+        let coverable = (0..g.len())
+            .map(|i| self.coverable[i] && keep_coverable.get(i).copied().unwrap_or(false) && to_reachable.at(i) <= half)
+            .collect();
+        Self {
+            grid: self.grid.clone(),
+            robot: self.robot,
+            clearance: self.clearance.clone(),
+            traversable: self.traversable.clone(),
+            reachable,
+            coverable,
+            start_cell: self.start_cell,
+            start: self.start,
+            warnings: self.warnings.clone(),
+        }
+    }
+
     /// The raster geometry.
     pub fn geometry(&self) -> &GridGeometry {
         &self.grid.geometry

@@ -121,6 +121,12 @@ impl DistancesFrom {
         }
     }
 
+    /// The grid distance to the centre of cell `i` (index in the space's grid); infinite when the cell is not
+    /// reachable from the start point.
+    pub fn to_cell(&self, i: usize) -> f64 {
+        self.dist.get(i).copied().unwrap_or(f64::INFINITY)
+    }
+
     /// The grid distance to `p` (as [`geodesic_distance`] measures it); `None` when `p` is not on a
     /// reachable cell connected to the start point.
     pub fn to(&self, space: &CoverageSpace, p: Point2) -> Option<f64> {

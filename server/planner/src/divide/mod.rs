@@ -1,0 +1,247 @@
+//! Dividing a site among a fleet (issue 20): every robot gets one connected part of the coverable area,
+//! holding its start, balanced by the time it will take to cover.
+//!
+//! The division is an additively weighted geodesic Voronoi diagram of the robots' starts, the weights found
+//! by balancing (an equivalent of DARP, Kapoutsis et al. 2017, whose iterative assignment also adjusts one
+//! term per robot on a distance matrix until the shares balance; ours is additive, which keeps parts
+//! connected and rooms whole where DARP's multiplicative term needs a connectivity correction):
+//!
+//! 1. per robot, its [`CoverageSpace`] (its own radius and tool), the travel distance from its start to
+//!    every reachable cell (fast marching, [`eikonal`]: round level sets, see there why), and the work each reachable cell stands for: the
+//!    coverable cells nearest to it, times the robot's seconds per covered cell (`rate`, from its tool
+//!    width and speed, times a calibration factor the caller may learn from planned durations);
+//! 2. every reachable cell goes to the robot with the least `distance + weight`, ties to the lower index;
+//!    the weights move (a robot with more work than the mean gets a larger weight) until the loads are
+//!    within `balance_tol` of each other or the iterations run out (the best division seen is kept; the
+//!    first iterations run on a sample of the cells, [`balance`]). Each robot's weight stays below every
+//!    other robot's distance to its start plus that robot's weight, so no robot loses its own start.
+//! 3. [`ownership`]: parts are made connected from their start in their robot's own reachable set (they
+//!    nearly are already: on a shortest path from a start to a cell of its part every cell belongs to the
+//!    part, by the triangle inequality, which the discrete distances keep up to their small error), cells left over go to a neighbouring part whose
+//!    robot can reach them, and the coverable cells beside the walls follow the reachable cell nearest to
+//!    them. Each part is then its robot's space confined to its cells plus a seam of `seam_cells` cells into
+//!    its neighbours ([`CoverageSpace::confined`]), so the union of the parts' plans leaves no seam.
+//!
+//! Why this follows walls and doorways: grid distances run through doorways, so every cell of a room
+//! entered by one doorway is the same distance further from every start outside it than the doorway is; the
+//! whole room goes to one robot unless a robot starts inside it or the balance needs a corridor cut, never a
+//! room cut by a wall into pieces one robot must drive round to.
+
+mod balance;
+mod eikonal;
+mod ownership;
+#[cfg(test)]
+mod tests;
+
+use crate::error::{PlannerError, Result};
+use crate::geom::Point2;
+use crate::map::{DistanceField, OccupancyGrid};
+use crate::space::{CoverageSpace, RobotShape};
+use crate::speed::SpeedLimits;
+
+/// No robot owns the cell.
+pub const NO_OWNER: u32 = u32::MAX;
+
+/// One robot of the fleet as division sees it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FleetRobot {
+    /// Its start (dock), map frame, metres.
+    pub start: Point2,
+    /// Radius and tool width.
+    pub shape: RobotShape,
+    /// Its speed limits.
+    pub limits: SpeedLimits,
+}
+
+impl FleetRobot {
+    /// Seconds to cover one square metre before calibration: lanes one tool width apart at full speed.
+    pub fn seconds_per_m2(&self) -> f64 {
+        1.0 / (self.shape.tool_width_m * self.limits.v_max_mps)
+    }
+}
+
+/// Knobs of [`divide`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DivideParams {
+    /// Loads within this share of each other count as balanced (0.02: the longest at most 2 % over the
+    /// shortest).
+    pub balance_tol: f64,
+    /// Most balancing iterations on the sample of cells, then on every cell.
+    pub iterations: [usize; 2],
+    /// Cells of a neighbour's part each part covers too, so that the union of the plans leaves no seam.
+    pub seam_cells: usize,
+}
+
+impl Default for DivideParams {
+    fn default() -> Self {
+        Self {
+            balance_tol: 0.02,
+            iterations: [300, 40],
+            seam_cells: 1,
+        }
+    }
+}
+
+/// A robot's share.
+#[derive(Debug, Clone)]
+pub struct Part {
+    /// The robot's space confined to its part (plan it with the ordinary pipeline).
+    pub space: CoverageSpace,
+    /// The work the division expected of it, seconds (rate × coverable cells it owns).
+    pub load_s: f64,
+    /// Coverable cells it owns (without the seam), m².
+    pub owned_area_m2: f64,
+}
+
+/// A site divided among a fleet.
+#[derive(Debug, Clone)]
+pub struct Division {
+    /// Robot index per grid cell, [`NO_OWNER`] where nobody covers.
+    pub owner: Vec<u32>,
+    /// Cells some robot of the fleet can cover (the union of the robots' coverable sets on the whole map).
+    pub coverable: Vec<bool>,
+    /// One part per robot, in the robots' order.
+    pub parts: Vec<Part>,
+    /// The balancing weights found, metres.
+    pub weights: Vec<f64>,
+    /// Remarks for the user (cells nobody could be given, a balance not reached).
+    pub warnings: Vec<String>,
+}
+
+impl Division {
+    /// Longest over shortest expected load (1 is perfect balance).
+    pub fn load_ratio(&self) -> f64 {
+        let (lo, hi) = self.parts.iter().fold((f64::INFINITY, 0.0_f64), |(lo, hi), p| {
+            (lo.min(p.load_s), hi.max(p.load_s))
+        });
+        if lo > 0.0 { hi / lo } else { f64::INFINITY }
+    }
+}
+
+/// What division knows of one robot on the map.
+struct RobotField {
+    /// Its whole space on the map (before confinement).
+    space: CoverageSpace,
+    /// Travel distance from its start to every reachable cell, metres ([`eikonal`]).
+    dist: Vec<f64>,
+    /// Distance to its reachable set, with the nearest reachable cell of every cell.
+    to_reachable: DistanceField,
+}
+
+impl RobotField {
+    fn new(grid: &OccupancyGrid, robot: &FleetRobot) -> Result<Self> {
+        let space = CoverageSpace::new(grid.clone(), robot.shape, robot.start)?;
+        let g = *space.geometry();
+        let s = g.index(space.start_cell);
+        let dist = eikonal::travel_distance(&g, &space.reachable, s, (g.center_of(s) - space.start).norm());
+        let reachable = &space.reachable;
+        let to_reachable = DistanceField::compute(g, |i| reachable[i], false);
+        Ok(Self {
+            space,
+            dist,
+            to_reachable,
+        })
+    }
+}
+
+/// Divides `grid` among `robots` (see the module docs). `calibration[i]` multiplies robot i's seconds per
+/// square metre (1 without knowledge; a caller that planned the parts can pass planned over expected
+/// duration to correct turns and transits the estimate does not see). Errors name the robot: a start off
+/// the map or where the robot fits nowhere, two starts in one cell.
+pub fn divide(
+    grid: &OccupancyGrid,
+    robots: &[FleetRobot],
+    calibration: &[f64],
+    params: &DivideParams,
+) -> Result<Division> {
+    if robots.is_empty() {
+        return Err(PlannerError::InvalidParam {
+            name: "robots",
+            reason: "at least one robot is needed".into(),
+        });
+    }
+    if !(params.balance_tol.is_finite() && params.balance_tol >= 0.0) {
+        return Err(PlannerError::InvalidParam {
+            name: "balance_tol",
+            reason: format!("must be a non-negative number, got {}", params.balance_tol),
+        });
+    }
+    let fields = robots
+        .iter()
+        .enumerate()
+        .map(|(k, r)| {
+            RobotField::new(grid, r).map_err(|e| PlannerError::InvalidParam {
+                name: "robots",
+                reason: format!("robots[{k}]: {e}"),
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    for (k, f) in fields.iter().enumerate() {
+        if let Some(j) = fields[..k]
+            .iter()
+            .position(|o| o.space.start_cell == f.space.start_cell)
+        {
+            return Err(PlannerError::InvalidParam {
+                name: "robots",
+                reason: format!("robots[{k}].start is in the same map cell as robots[{j}].start"),
+            });
+        }
+    }
+    let g = grid.geometry;
+    let cell_area = g.resolution * g.resolution;
+    let rates: Vec<f64> = robots
+        .iter()
+        .enumerate()
+        .map(|(k, r)| {
+            let c = calibration
+                .get(k)
+                .copied()
+                .filter(|c| c.is_finite() && *c > 0.0)
+                .unwrap_or(1.0);
+            r.seconds_per_m2() * c * cell_area
+        })
+        .collect();
+    let table = balance::Table::new(&fields, &rates);
+    let (weights, balanced) = balance::balance(&table, params);
+    let mut warnings = Vec::new();
+    let mut owner = ownership::assign(&table, &weights, g.len());
+    let stranded = ownership::make_connected(&fields, &mut owner);
+    if stranded > 0 {
+        warnings.push(format!(
+            "{:.1} m² reachable only through other robots' parts was left to no robot",
+            stranded as f64 * cell_area
+        ));
+    }
+    ownership::extend_to_coverable(&fields, &mut owner);
+    let mut parts = Vec::with_capacity(robots.len());
+    for (k, f) in fields.iter().enumerate() {
+        let (keep_reachable, keep_coverable) = ownership::part_masks(&g, &owner, k as u32, params.seam_cells);
+        let space = f.space.confined(&keep_reachable, &keep_coverable);
+        let owned = (0..g.len())
+            .filter(|&i| owner[i] == k as u32 && f.space.coverable[i])
+            .count();
+        parts.push(Part {
+            space,
+            load_s: owned as f64 * rates[k],
+            owned_area_m2: owned as f64 * cell_area,
+        });
+    }
+    let coverable = (0..g.len())
+        .map(|i| fields.iter().any(|f| f.space.coverable[i]))
+        .collect();
+    let mut division = Division {
+        owner,
+        coverable,
+        parts,
+        weights,
+        warnings,
+    };
+    if !balanced {
+        let ratio = division.load_ratio();
+        division.warnings.push(format!(
+            "the expected loads could not be balanced closer than {ratio:.2} (longest over shortest): rooms are \
+             not cut and no robot gives up its start"
+        ));
+    }
+    Ok(division)
+}

@@ -1,0 +1,99 @@
+//! Step 3 of [`divide`](super::divide): who owns each cell, parts made connected, and each part's masks.
+
+use std::collections::VecDeque;
+
+use super::balance::Table;
+use super::{NO_OWNER, RobotField};
+use crate::map::GridGeometry;
+use crate::space::flood_fill8;
+
+/// Owner of every grid cell some robot can reach, for `weights` ([`NO_OWNER`] elsewhere).
+pub(super) fn assign(table: &Table, weights: &[f64], cells: usize) -> Vec<u32> {
+    let mut owner = vec![NO_OWNER; cells];
+    for (k, &i) in table.cells.iter().enumerate() {
+        if let Some(r) = table.owner(k, weights) {
+            owner[i as usize] = r as u32;
+        }
+    }
+    owner
+}
+
+/// Keeps of each part only what its robot reaches from its start inside the part, then hands the cells
+/// this frees to a neighbouring part whose robot can reach them (breadth first from every part at once).
+/// Returns how many reachable cells were left to nobody.
+pub(super) fn make_connected(fields: &[RobotField], owner: &mut [u32]) -> usize {
+    let g = *fields[0].space.geometry();
+    let mut queue = VecDeque::new();
+    for (r, f) in fields.iter().enumerate() {
+        let mine: Vec<bool> = (0..g.len())
+            .map(|i| owner[i] == r as u32 && f.space.reachable[i])
+            .collect();
+        let kept = flood_fill8(&g, &mine, f.space.start_cell);
+        for i in 0..g.len() {
+            if owner[i] == r as u32 && !kept[i] {
+                owner[i] = NO_OWNER;
+            }
+        }
+    }
+    for (i, &o) in owner.iter().enumerate() {
+        if o != NO_OWNER {
+            queue.push_back(i);
+        }
+    }
+    while let Some(i) = queue.pop_front() {
+        let o = owner[i];
+        for n in g.neighbors8(g.cell(i)) {
+            let j = g.index(n);
+            if owner[j] == NO_OWNER && fields[o as usize].space.reachable[j] {
+                owner[j] = o;
+                queue.push_back(j);
+            }
+        }
+    }
+    (0..g.len())
+        .filter(|&i| owner[i] == NO_OWNER && fields.iter().any(|f| f.space.reachable[i]))
+        .count()
+}
+
+/// Gives every coverable cell that no robot stands on (beside walls and obstacles) to the owner of the
+/// reachable cell nearest to it, among the robots that can cover it.
+pub(super) fn extend_to_coverable(fields: &[RobotField], owner: &mut [u32]) {
+    let n = owner.len();
+    let mut ext = vec![NO_OWNER; n];
+    for (i, e) in ext.iter_mut().enumerate() {
+        if owner[i] != NO_OWNER {
+            continue;
+        }
+        let mut fallback = NO_OWNER;
+        for (r, f) in fields.iter().enumerate().filter(|(_, f)| f.space.coverable[i]) {
+            let near = f.to_reachable.nearest_site_index(i).map_or(NO_OWNER, |j| owner[j]);
+            if near == r as u32 {
+                fallback = near;
+                break;
+            }
+            if fallback == NO_OWNER && near != NO_OWNER && fields[near as usize].space.coverable[i] {
+                fallback = near;
+            }
+        }
+        *e = fallback;
+    }
+    for (o, e) in owner.iter_mut().zip(ext) {
+        if *o == NO_OWNER {
+            *o = e;
+        }
+    }
+}
+
+/// Robot `r`'s masks: the cells it owns (for its centre), and those plus `seam_cells` cells into its
+/// neighbours' parts (to cover).
+pub(super) fn part_masks(g: &GridGeometry, owner: &[u32], r: u32, seam_cells: usize) -> (Vec<bool>, Vec<bool>) {
+    let own: Vec<bool> = owner.iter().map(|&o| o == r).collect();
+    let mut cover = own.clone();
+    for _ in 0..seam_cells {
+        let grown: Vec<bool> = (0..g.len())
+            .map(|i| cover[i] || (owner[i] != NO_OWNER && g.neighbors8(g.cell(i)).any(|c| cover[g.index(c)])))
+            .collect();
+        cover = grown;
+    }
+    (own, cover)
+}
