@@ -21,6 +21,7 @@ use shift_planner::pipeline::{NoMonitor, Objective, PlanParams, plan_shaped};
 use shift_planner::space::{CoverageSpace, RobotShape};
 use shift_planner::speed::{SpeedLimits, SpeedParams};
 use shiftd::eval::{TABLE_HEADER, run_eval, table_line};
+use shiftd::eval_fleet::{FLEET_TABLE_HEADER, fleet_table_line, run_fleet_eval};
 use shiftd::render::render_png;
 use shiftd::scene_io::{load_attribute, load_map, load_scene, scene_attribute_path};
 
@@ -156,6 +157,10 @@ struct EvalArgs {
     /// Write a PNG per plan into this folder.
     #[arg(long)]
     render: Option<PathBuf>,
+    /// Divide each scene among this many robots from spread docks instead (comma-separated sizes, e.g.
+    /// 2,3,4): one row per scene and size with the fleet's durations, coverage and seam overlap.
+    #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(usize))]
+    robots: Vec<usize>,
 }
 
 fn parse_xy(s: &str) -> Result<Point2, String> {
@@ -401,6 +406,25 @@ fn cmd_plan(args: PlanArgs) -> Result<()> {
 }
 
 fn cmd_eval(args: EvalArgs) -> Result<()> {
+    if !args.robots.is_empty() {
+        if let Some(bad) = args.robots.iter().find(|&&n| n == 0) {
+            anyhow::bail!("--robots: every fleet size must be at least 1, got {bad}");
+        }
+        if !args.json {
+            println!("{FLEET_TABLE_HEADER}");
+        }
+        run_fleet_eval(&args.scenes, &args.robots, args.render.as_deref(), |row| {
+            if args.json {
+                match serde_json::to_string(row) {
+                    Ok(s) => println!("{s}"),
+                    Err(e) => eprintln!("error: {e}"),
+                }
+            } else {
+                println!("{}", fleet_table_line(row));
+            }
+        })?;
+        return Ok(());
+    }
     if !args.json {
         println!("{TABLE_HEADER}");
     }

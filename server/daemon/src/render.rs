@@ -12,7 +12,8 @@ use shift_planner::pipeline::{PlanOutput, WaypointKind};
 use shift_planner::space::CoverageSpace;
 use shift_planner::speed::{SpeedLimits, SpeedProfile};
 
-const PALETTE: [(u8, u8, u8); 10] = [
+/// Region (and fleet part) colours.
+pub(crate) const PALETTE: [(u8, u8, u8); 10] = [
     (166, 206, 227),
     (178, 223, 138),
     (251, 154, 153),
@@ -121,7 +122,8 @@ pub fn render_png(
     Ok(())
 }
 
-fn pale((r, g, b): (u8, u8, u8)) -> (u8, u8, u8) {
+/// `colour` mixed three parts white to one.
+pub(crate) fn pale((r, g, b): (u8, u8, u8)) -> (u8, u8, u8) {
     let mix = |c: u8| ((u16::from(c) + 3 * 255) / 4) as u8;
     (mix(r), mix(g), mix(b))
 }

@@ -135,3 +135,41 @@ fn plan_follows_an_attribute_of_blobs() {
     assert!(png.is_file());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn eval_divides_a_scene_among_a_fleet_and_prints_its_figures() {
+    // A folder holding the fixture scene, as `--scenes` expects.
+    let dir = std::env::temp_dir().join(format!("shiftd-cli-fleet-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("tmp");
+    let scene = dir.join("four-rooms-obstacles");
+    if !scene.exists() {
+        std::os::unix::fs::symlink(fixture(), &scene).expect("link the fixture");
+    }
+    let out = shiftd()
+        .args(["eval", "--robots", "2,3", "--json", "--scenes"])
+        .arg(&dir)
+        .output()
+        .expect("runs");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let rows: Vec<serde_json::Value> = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("a JSON row"))
+        .collect();
+    assert_eq!(rows.len(), 2);
+    for (row, n) in rows.iter().zip([2, 3]) {
+        assert_eq!(row["robots"], n);
+        assert_eq!(row["docks"].as_array().map(Vec::len), Some(n));
+        assert!(row["coverage_pct"].as_f64().is_some_and(|c| c >= 99.0), "{row}");
+        assert!(row["seam_overlap_pct"].as_f64().is_some_and(|s| s <= 3.0), "{row}");
+        assert!(row["duration_ratio"].as_f64().is_some_and(|r| r <= 1.15), "{row}");
+        assert_eq!(row["collisions"], 0);
+    }
+    let zero = shiftd()
+        .args(["eval", "--robots", "0", "--scenes"])
+        .arg(&dir)
+        .output()
+        .expect("runs");
+    assert!(!zero.status.success());
+    assert!(String::from_utf8_lossy(&zero.stderr).contains("--robots"));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,5 +1,6 @@
 //! Step 2 of [`divide`](super::divide): the weights that balance the robots' loads.
 
+use super::work::Work;
 use super::{DivideParams, RobotField};
 
 /// Reachable cells (of any robot) above which the first balancing iterations run on a sample of them.
@@ -19,8 +20,8 @@ pub(super) struct Table {
 }
 
 impl Table {
-    /// `rates[r]`: robot r's seconds per coverable cell.
-    pub fn new(fields: &[RobotField], rates: &[f64]) -> Self {
+    /// `work`: each robot's expected seconds per coverable cell.
+    pub fn new(fields: &[RobotField], work: &Work<'_>) -> Self {
         let n = fields[0].space.reachable.len();
         let cells: Vec<u32> = (0..n)
             .filter(|&i| fields.iter().any(|f| f.space.reachable[i]))
@@ -36,13 +37,13 @@ impl Table {
             .collect();
         let work = fields
             .iter()
-            .zip(rates)
-            .map(|(f, &rate)| {
+            .enumerate()
+            .map(|(r, f)| {
                 let mut w = vec![0.0_f32; cells.len()];
                 for i in (0..n).filter(|&i| f.space.coverable[i]) {
                     let k = f.to_reachable.nearest_site_index(i).map_or(u32::MAX, |j| slot[j]);
                     if let Some(x) = w.get_mut(k as usize) {
-                        *x += rate as f32;
+                        *x += work.at(r, i) as f32;
                     }
                 }
                 w

@@ -7,9 +7,10 @@
 //! connected and rooms whole where DARP's multiplicative term needs a connectivity correction):
 //!
 //! 1. per robot, its [`CoverageSpace`] (its own radius and tool), the travel distance from its start to
-//!    every reachable cell (fast marching, [`eikonal`]: round level sets, see there why), and the work each reachable cell stands for: the
-//!    coverable cells nearest to it, times the robot's seconds per covered cell (`rate`, from its tool
-//!    width and speed, times a calibration factor the caller may learn from planned durations);
+//!    every reachable cell (fast marching, [`eikonal`]: round level sets, see there why), and the work each
+//!    reachable cell stands for: the coverable cells nearest to it, each the seconds the robot spends on it
+//!    (lanes a tool width apart at the speed the attribute asks for there, [`work`]), times a calibration
+//!    per cell the caller may learn from planned durations;
 //! 2. every reachable cell goes to the robot with the least `distance + weight`, ties to the lower index;
 //!    the weights move (a robot with more work than the mean gets a larger weight) until the loads are
 //!    within `balance_tol` of each other or the iterations run out (the best division seen is kept; the
@@ -20,7 +21,8 @@
 //!    part, by the triangle inequality, which the discrete distances keep up to their small error), cells left over go to a neighbouring part whose
 //!    robot can reach them, and the coverable cells beside the walls follow the reachable cell nearest to
 //!    them. Each part is then its robot's space confined to its cells plus a seam of `seam_cells` cells into
-//!    its neighbours ([`CoverageSpace::confined`]), so the union of the parts' plans leaves no seam.
+//!    its neighbours ([`CoverageSpace::confined`]), so the union of the parts' plans leaves no seam, with the
+//!    robot's centre kept half a tool inside the part's boundary with other parts (its swath ends there).
 //!
 //! Why this follows walls and doorways: grid distances run through doorways, so every cell of a room
 //! entered by one doorway is the same distance further from every start outside it than the doorway is; the
@@ -32,12 +34,14 @@ mod eikonal;
 mod ownership;
 #[cfg(test)]
 mod tests;
+mod work;
 
 use crate::error::{PlannerError, Result};
 use crate::geom::Point2;
 use crate::map::{DistanceField, OccupancyGrid};
 use crate::space::{CoverageSpace, RobotShape};
 use crate::speed::SpeedLimits;
+use crate::speed::attribute::AttributeMap;
 
 /// No robot owns the cell.
 pub const NO_OWNER: u32 = u32::MAX;
@@ -51,13 +55,6 @@ pub struct FleetRobot {
     pub shape: RobotShape,
     /// Its speed limits.
     pub limits: SpeedLimits,
-}
-
-impl FleetRobot {
-    /// Seconds to cover one square metre before calibration: lanes one tool width apart at full speed.
-    pub fn seconds_per_m2(&self) -> f64 {
-        1.0 / (self.shape.tool_width_m * self.limits.v_max_mps)
-    }
 }
 
 /// Knobs of [`divide`].
@@ -144,14 +141,17 @@ impl RobotField {
     }
 }
 
-/// Divides `grid` among `robots` (see the module docs). `calibration[i]` multiplies robot i's seconds per
-/// square metre (1 without knowledge; a caller that planned the parts can pass planned over expected
-/// duration to correct turns and transits the estimate does not see). Errors name the robot: a start off
+/// Divides `grid` among `robots` (see the module docs), with the speeds `attribute` asks for (RFICP) in the
+/// expected times when given (it must have the grid's geometry). `calibration[i]` multiplies the expected
+/// time on cell i (1 without knowledge; a caller that planned the parts can pass each part's planned over
+/// expected duration on its cells, to correct for the turns and transits the estimate does not see: they
+/// belong to the place, short lanes between shelves or a long way from the dock, more than to the robot). Errors name the robot: a start off
 /// the map or where the robot fits nowhere, two starts in one cell.
 pub fn divide(
     grid: &OccupancyGrid,
     robots: &[FleetRobot],
-    calibration: &[f64],
+    attribute: Option<&AttributeMap>,
+    calibration: Option<&[f64]>,
     params: &DivideParams,
 ) -> Result<Division> {
     if robots.is_empty() {
@@ -188,20 +188,18 @@ pub fn divide(
         }
     }
     let g = grid.geometry;
+    if attribute.is_some_and(|a| *a.geometry() != g) {
+        return Err(PlannerError::InvalidParam {
+            name: "attribute",
+            reason: "the attribute map must have the site's grid geometry".into(),
+        });
+    }
     let cell_area = g.resolution * g.resolution;
-    let rates: Vec<f64> = robots
-        .iter()
-        .enumerate()
-        .map(|(k, r)| {
-            let c = calibration
-                .get(k)
-                .copied()
-                .filter(|c| c.is_finite() && *c > 0.0)
-                .unwrap_or(1.0);
-            r.seconds_per_m2() * c * cell_area
-        })
+    let coverable: Vec<bool> = (0..g.len())
+        .map(|i| fields.iter().any(|f| f.space.coverable[i]))
         .collect();
-    let table = balance::Table::new(&fields, &rates);
+    let work = work::Work::new(robots, calibration, cell_area, attribute, &coverable);
+    let table = balance::Table::new(&fields, &work);
     let (weights, balanced) = balance::balance(&table, params);
     let mut warnings = Vec::new();
     let mut owner = ownership::assign(&table, &weights, g.len());
@@ -215,20 +213,19 @@ pub fn divide(
     ownership::extend_to_coverable(&fields, &mut owner);
     let mut parts = Vec::with_capacity(robots.len());
     for (k, f) in fields.iter().enumerate() {
-        let (keep_reachable, keep_coverable) = ownership::part_masks(&g, &owner, k as u32, params.seam_cells);
+        let inset = f.space.robot.tool_width_m / 2.0;
+        let (keep_reachable, keep_coverable) =
+            ownership::part_masks(&f.space, &owner, k as u32, params.seam_cells, inset);
         let space = f.space.confined(&keep_reachable, &keep_coverable);
-        let owned = (0..g.len())
+        let owned: Vec<usize> = (0..g.len())
             .filter(|&i| owner[i] == k as u32 && f.space.coverable[i])
-            .count();
+            .collect();
         parts.push(Part {
             space,
-            load_s: owned as f64 * rates[k],
-            owned_area_m2: owned as f64 * cell_area,
+            load_s: owned.iter().map(|&i| work.at(k, i)).sum(),
+            owned_area_m2: owned.len() as f64 * cell_area,
         });
     }
-    let coverable = (0..g.len())
-        .map(|i| fields.iter().any(|f| f.space.coverable[i]))
-        .collect();
     let mut division = Division {
         owner,
         coverable,

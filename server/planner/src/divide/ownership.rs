@@ -4,8 +4,8 @@ use std::collections::VecDeque;
 
 use super::balance::Table;
 use super::{NO_OWNER, RobotField};
-use crate::map::GridGeometry;
-use crate::space::flood_fill8;
+use crate::map::DistanceField;
+use crate::space::{CoverageSpace, flood_fill8};
 
 /// Owner of every grid cell some robot can reach, for `weights` ([`NO_OWNER`] elsewhere).
 pub(super) fn assign(table: &Table, weights: &[f64], cells: usize) -> Vec<u32> {
@@ -84,9 +84,22 @@ pub(super) fn extend_to_coverable(fields: &[RobotField], owner: &mut [u32]) {
     }
 }
 
-/// Robot `r`'s masks: the cells it owns (for its centre), and those plus `seam_cells` cells into its
-/// neighbours' parts (to cover).
-pub(super) fn part_masks(g: &GridGeometry, owner: &[u32], r: u32, seam_cells: usize) -> (Vec<bool>, Vec<bool>) {
+/// Robot `r`'s masks: where its centre may go, and what it covers.
+///
+/// It covers the cells it owns plus `seam_cells` cells into its neighbours' parts. Its centre stays on the
+/// cells it owns at least `inset_m` (half its tool) from every other part, so that its swath ends at the
+/// boundary instead of sweeping half a tool into the neighbour's part (both neighbours would, and the seam
+/// would be swept twice a tool wide); it gets back the cells near the corners where a wall meets the
+/// boundary (their coverable cells are out of reach of the inset). Where the inset would cut its start off
+/// from some of its part, the part keeps its full extent.
+pub(super) fn part_masks(
+    space: &CoverageSpace,
+    owner: &[u32],
+    r: u32,
+    seam_cells: usize,
+    inset_m: f64,
+) -> (Vec<bool>, Vec<bool>) {
+    let g = space.geometry();
     let own: Vec<bool> = owner.iter().map(|&o| o == r).collect();
     let mut cover = own.clone();
     for _ in 0..seam_cells {
@@ -95,5 +108,27 @@ pub(super) fn part_masks(g: &GridGeometry, owner: &[u32], r: u32, seam_cells: us
             .collect();
         cover = grown;
     }
-    (own, cover)
+    let others = DistanceField::compute(*g, |i| owner[i] != NO_OWNER && owner[i] != r, false);
+    let mut keep: Vec<bool> = (0..g.len())
+        .map(|i| own[i] && space.reachable[i] && others.at(i) >= inset_m - 1e-9)
+        .collect();
+    // Cells the inset centre cannot reach within half a tool (corners where a wall meets the boundary) get
+    // back the reachable cells near them.
+    let half = space.robot.tool_width_m / 2.0 + 1e-9;
+    let to_keep = DistanceField::compute(*g, |i| keep[i], false);
+    let missing: Vec<bool> = (0..g.len())
+        .map(|i| own[i] && space.coverable[i] && to_keep.at(i) > half)
+        .collect();
+    if missing.iter().any(|&m| m) {
+        let to_missing = DistanceField::compute(*g, |i| missing[i], false);
+        for (i, k) in keep.iter_mut().enumerate() {
+            *k |= own[i] && space.reachable[i] && to_missing.at(i) <= half;
+        }
+    }
+    let connected = flood_fill8(g, &keep, space.start_cell);
+    if keep.iter().zip(&connected).all(|(k, c)| k == c) {
+        (keep, cover)
+    } else {
+        (own, cover)
+    }
 }

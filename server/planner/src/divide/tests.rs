@@ -80,7 +80,7 @@ fn an_open_hall_is_shared_evenly_by_two_three_and_four_robots() {
     let docks = [robot(1.0, 1.0), robot(2.0, 1.0), robot(3.0, 1.0), robot(19.0, 11.0)];
     for n in 2..=4 {
         let robots = &docks[..n];
-        let div = divide(&grid, robots, &vec![1.0; n], &DivideParams::default()).expect("divides");
+        let div = divide(&grid, robots, None, None, &DivideParams::default()).expect("divides");
         check_invariants(&div, robots);
         assert!(div.load_ratio() <= 1.05, "{n} robots: load ratio {}", div.load_ratio());
         let owned: f64 = div.parts.iter().map(|p| p.owned_area_m2).sum();
@@ -96,7 +96,7 @@ fn a_faster_robot_with_a_wider_tool_gets_more_area() {
     big.shape.tool_width_m = 0.6;
     big.limits = SpeedLimits::new(0.1, 1.2, 0.5);
     let robots = [robot(2.0, 6.0), big];
-    let div = divide(&grid, &robots, &[1.0, 1.0], &DivideParams::default()).expect("divides");
+    let div = divide(&grid, &robots, None, None, &DivideParams::default()).expect("divides");
     check_invariants(&div, &robots);
     let ratio = div.parts[1].owned_area_m2 / div.parts[0].owned_area_m2;
     // Four times the rate: about four times the area for the same time.
@@ -110,7 +110,7 @@ fn rooms_off_a_corridor_are_not_cut() {
     // part may end anywhere along the corridor but never inside a room.
     let (grid, rooms) = corridor_with_rooms();
     let robots = [robot(1.0, 1.0), robot(15.0, 1.0), robot(29.0, 1.0)];
-    let div = divide(&grid, &robots, &[1.0; 3], &DivideParams::default()).expect("divides");
+    let div = divide(&grid, &robots, None, None, &DivideParams::default()).expect("divides");
     check_invariants(&div, &robots);
     let g = grid.geometry;
     for (k, r) in rooms.iter().enumerate() {
@@ -135,7 +135,7 @@ fn a_robot_too_wide_for_a_passage_leaves_what_lies_beyond_to_one_that_fits() {
     let mut wide = robot(2.0, 4.0);
     wide.shape.radius_m = 0.3;
     let robots = [wide, robot(4.0, 4.0)];
-    let div = divide(&grid, &robots, &[1.0, 1.0], &DivideParams::default()).expect("divides");
+    let div = divide(&grid, &robots, None, None, &DivideParams::default()).expect("divides");
     check_invariants(&div, &robots);
     let g = grid.geometry;
     let beyond = (0..g.len()).filter(|&i| g.center_of(i).x > 10.5 && div.coverable[i]);
@@ -148,13 +148,13 @@ fn a_robot_too_wide_for_a_passage_leaves_what_lies_beyond_to_one_that_fits() {
 fn bad_fleets_are_refused_naming_the_robot() {
     let grid = room(10.0, 10.0);
     let p = DivideParams::default();
-    let err = divide(&grid, &[], &[], &p).expect_err("no robots");
+    let err = divide(&grid, &[], None, None, &p).expect_err("no robots");
     assert!(err.to_string().contains("robots"), "{err}");
-    let err = divide(&grid, &[robot(2.0, 2.0), robot(2.02, 2.03)], &[], &p).expect_err("one cell");
+    let err = divide(&grid, &[robot(2.0, 2.0), robot(2.02, 2.03)], None, None, &p).expect_err("one cell");
     assert!(err.to_string().contains("robots[1].start"), "{err}");
-    let err = divide(&grid, &[robot(2.0, 2.0), robot(40.0, 2.0)], &[], &p).expect_err("off the map");
+    let err = divide(&grid, &[robot(2.0, 2.0), robot(40.0, 2.0)], None, None, &p).expect_err("off the map");
     assert!(err.to_string().contains("robots[1]"), "{err}");
-    let err = divide(&grid, &[robot(2.0, f64::NAN)], &[], &p).expect_err("NaN");
+    let err = divide(&grid, &[robot(2.0, f64::NAN)], None, None, &p).expect_err("NaN");
     assert!(err.to_string().contains("robots[0]"), "{err}");
 }
 
@@ -217,7 +217,7 @@ proptest! {
             }
         }
         prop_assume!(robots.len() == n);
-        let div = divide(&grid, &robots, &vec![1.0; n], &DivideParams::default()).expect("divides");
+        let div = divide(&grid, &robots, None, None, &DivideParams::default()).expect("divides");
         // Docks in separate pieces of the site are legal; the invariants hold per piece.
         check_invariants(&div, &robots);
     }

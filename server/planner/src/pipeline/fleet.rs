@@ -3,8 +3,9 @@
 //!
 //! Division balances an estimate (coverable area over tool width times speed); real plans add turns,
 //! transits from each dock and slow-downs the estimate cannot see, and they add them unevenly (a part of
-//! short lanes turns more than one of long lanes). So after each round every robot's seconds per square
-//! metre is corrected by its planned duration over its expected load, and the site is divided again, until
+//! short lanes turns more than one of long lanes). So after each round the expected time of every cell is
+//! corrected by its part's planned duration over the part's expected load (the overhead belongs to the
+//! place: whoever gets those shelves next round gets their turns too), and the site is divided again, until
 //! the longest planned duration is within [`FleetParams::goal_ratio`] of the shortest or the rounds run out;
 //! the best round is kept.
 
@@ -15,6 +16,11 @@ use crate::metrics::CoverageRaster;
 use crate::pipeline::{NoMonitor, PlanOutput, PlanParams, plan_shaped};
 use crate::speed::attribute::AttributeMap;
 use crate::speed::{SpeedParams, SpeedProfile};
+
+/// Exponent of each round's correction (planned over expected time): below 1, so that a correction learned
+/// on one division is not applied in full to the next, whose parts differ (full corrections made some
+/// fleets swing between two divisions, each over-correcting the other).
+const CALIBRATION_DAMPING: f64 = 0.6;
 
 /// Knobs of [`plan_fleet`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -31,7 +37,7 @@ impl Default for FleetParams {
     fn default() -> Self {
         Self {
             divide: DivideParams::default(),
-            rounds: 3,
+            rounds: 4,
             goal_ratio: 1.08,
         }
     }
@@ -75,14 +81,17 @@ pub fn plan_fleet(
     fleet: &FleetParams,
 ) -> Result<FleetPlan> {
     let plan_round = |calibration: &[f64], round: usize| -> Result<FleetPlan> {
-        let division = divide(grid, robots, calibration, &fleet.divide)?;
+        let division = divide(grid, robots, attribute, Some(calibration), &fleet.divide)?;
         let mut plans = Vec::with_capacity(robots.len());
         for (part, robot) in division.parts.iter().zip(robots) {
             let p = PlanParams {
                 limits: robot.limits,
                 ..params.clone()
             };
-            let speed = SpeedParams::new(robot.limits, robot.shape.tool_width_m);
+            let speed = SpeedParams {
+                attribute_range: attribute.and_then(|a| a.range_over(&division.coverable)),
+                ..SpeedParams::new(robot.limits, robot.shape.tool_width_m)
+            };
             plans.push(plan_shaped(&part.space, &p, attribute, &speed, &mut NoMonitor)?);
         }
         let metrics = fleet_metrics(&division, &plans);
@@ -93,20 +102,25 @@ pub fn plan_fleet(
             rounds: round,
         })
     };
-    let mut calibration = vec![1.0; robots.len()];
+    let mut calibration = vec![1.0; grid.cells.len()];
     let mut last = plan_round(&calibration, 1)?;
     let mut best: Option<FleetPlan> = None;
     for round in 2..=fleet.rounds.max(1) {
         if last.metrics.duration_ratio <= fleet.goal_ratio {
             break;
         }
-        for ((c, part), d) in calibration
-            .iter_mut()
-            .zip(&last.division.parts)
-            .zip(&last.metrics.durations_s)
-        {
-            if part.load_s > 0.0 && *d > 0.0 {
-                *c *= d / part.load_s;
+        let factors: Vec<f64> = (last.division.parts.iter().zip(&last.metrics.durations_s))
+            .map(|(part, d)| {
+                if part.load_s > 0.0 && *d > 0.0 {
+                    (d / part.load_s).powf(CALIBRATION_DAMPING)
+                } else {
+                    1.0
+                }
+            })
+            .collect();
+        for (c, &o) in calibration.iter_mut().zip(&last.division.owner) {
+            if let Some(f) = factors.get(o as usize) {
+                *c *= f;
             }
         }
         let next = plan_round(&calibration, round)?;

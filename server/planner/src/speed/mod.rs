@@ -46,6 +46,10 @@ pub struct SpeedParams {
     /// Share of the open-loop duration the refinement may add to make the deposit uniform (0.5 = up to 50 %
     /// longer); see [`refine::refine`].
     pub extra_time: f64,
+    /// The attribute range `(lowest, highest)` the speed law is set for ([`DwellLaw::for_range`]); `None` =
+    /// the range over the space's coverable cells. A fleet passes its whole site's range, so that every
+    /// robot serves the same attribute with the same dwell, whatever part it got.
+    pub attribute_range: Option<(f64, f64)>,
 }
 
 impl SpeedParams {
@@ -57,6 +61,7 @@ impl SpeedParams {
             spacing_m: None,
             refine_iterations: 10,
             extra_time: 0.5,
+            attribute_range: None,
         }
     }
 }
@@ -167,7 +172,10 @@ pub fn profile_path(
         None => (sharp_everywhere(), before, false),
     };
     let samples = samples::resample(&smoothed, spacing, &limits);
-    let (a_lo, a_hi) = attribute.range_over(&space.coverable).unwrap_or((1.0, 1.0));
+    let (a_lo, a_hi) = params
+        .attribute_range
+        .or_else(|| attribute.range_over(&space.coverable))
+        .unwrap_or((1.0, 1.0));
     let law = DwellLaw::for_range(a_lo, a_hi, w, &limits);
     let targets: Vec<f64> = samples
         .points
