@@ -95,6 +95,22 @@ impl LiveMaps {
         Some(sites.entry(summary.site.clone()).or_insert(live).clone())
     }
 
+    /// Heap bytes held by every site's live map ([`LiveMap::memory_bytes`]) and by the static clearance fields
+    /// they filter with (one per site, shared with the site's map), in that order.
+    pub fn memory_bytes(&self) -> (usize, usize) {
+        let live = self.sites.read().map_or(0, |sites| {
+            sites
+                .values()
+                .filter_map(|s| s.map.read().ok().map(|m| m.memory_bytes()))
+                .sum()
+        });
+        let statics = self
+            .statics
+            .read()
+            .map_or(0, |f| f.values().map(|d| d.memory_bytes()).sum());
+        (live, statics)
+    }
+
     /// Fills the live fields of a site summary.
     pub fn annotate(&self, summary: &mut SiteSummary, now_ms: u64) {
         if let Some(live) = self.get(&summary.site)

@@ -76,6 +76,11 @@ fn wrap(a: f64) -> f64 {
 }
 
 impl PoseHistory {
+    /// Heap bytes held (the poses kept, by capacity).
+    pub fn memory_bytes(&self) -> usize {
+        self.poses.capacity() * size_of::<Pose2>()
+    }
+
     /// An empty history.
     pub fn new(params: PoseHistoryParams) -> Self {
         Self {

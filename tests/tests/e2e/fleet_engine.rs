@@ -266,6 +266,17 @@ async fn obstacle_on_the_plans_site(sensor: Sensor, layout: Layout) -> Result<()
         .and_then(|v| v.parse::<f64>().ok())
         .context("shift_live_map_bytes of hall in the metrics")?;
     assert!(bytes > 0.0, "{bytes}");
+    // And the daemon's memory per component (set when the first points were placed): the live maps, and the
+    // static clearance fields they filter with (hall's map was uploaded).
+    for component in ["live_maps", "site_clearance"] {
+        let prefix = format!("shift_memory_bytes{{component=\"{component}\"}} ");
+        let v = metrics
+            .lines()
+            .find_map(|l| l.strip_prefix(prefix.as_str()))
+            .and_then(|v| v.parse::<f64>().ok())
+            .with_context(|| format!("{prefix}in the metrics"))?;
+        assert!(v > 0.0, "{component}: {v}");
+    }
     let (_, r) = server.get("/v1/robots/r1").await?;
     assert_eq!(r["site"], "hall", "{r}");
     assert!(r["sensors"]["placed"].as_u64().unwrap_or(0) >= 1, "{r}");

@@ -28,6 +28,8 @@ const EXPIRE_EVERY_MS: u64 = 5_000;
 const FED_EVERY_MS: u64 = 1_000;
 /// Odometry messages waiting at most (all robots); beyond, the oldest is dropped.
 const ODOM_QUEUE: usize = 4_096;
+/// The memory gauges (`shift_memory_bytes{component}`) are set at most this often, milliseconds.
+const MEMORY_EVERY_MS: u64 = 5_000;
 
 /// One cloud or scan as received.
 #[derive(Debug)]
@@ -153,6 +155,36 @@ impl Ingest {
         self.wake.notify_one();
     }
 
+    /// Heap bytes waiting in the queues: the raw clouds and scans (their payloads, by capacity) and the odometry.
+    /// Bounded: `capacity` messages per robot and stream, [`ODOM_QUEUE`] poses.
+    pub fn queued_bytes(&self) -> usize {
+        self.queues.lock().map_or(0, |q| {
+            let sensors: usize = q
+                .per_robot
+                .values()
+                .map(|v| v.capacity() * size_of::<RawCloud>() + v.iter().map(|c| c.bytes.capacity()).sum::<usize>())
+                .sum();
+            q.odom.capacity() * size_of::<(String, FramedPose)>() + sensors
+        })
+    }
+
+    /// Sets `shift_memory_bytes{component}`: the live maps, the static clearance fields they filter with, the
+    /// sensor hub (odometry histories, messages waiting for their pose) and the ingest queues (issue 22: a figure
+    /// per component, beside the allocator's own in `shift_allocator_bytes`).
+    fn publish_memory(&self) {
+        let (live, statics) = self.live.memory_bytes();
+        let hub = self.hub.lock().map_or(0, |h| h.memory_bytes());
+        let parts = [
+            ("live_maps", live),
+            ("site_clearance", statics),
+            ("sensor_hub", hub),
+            ("ingest_queues", self.queued_bytes()),
+        ];
+        for (component, bytes) in parts {
+            metrics::gauge!("shift_memory_bytes", "component" => component).set(bytes as f64);
+        }
+    }
+
     /// Makes the thread leave once the queues are empty.
     pub fn stop(&self) {
         if let Ok(mut q) = self.queues.lock() {
@@ -201,6 +233,7 @@ impl Ingest {
     /// The thread's loop.
     pub fn run(&self) {
         let mut last_log: Option<Instant> = None;
+        let mut memory_ms: Option<u64> = None;
         while let Some(work) = self.next() {
             let now = self.clock.now_ms();
             let outcomes = match work {
@@ -214,19 +247,30 @@ impl Ingest {
                 Work::Tick => Vec::new(),
             };
             let expired = self.hub.lock().map(|mut h| h.expire(now)).unwrap_or_default();
+            let mut placed = false;
             for outcome in outcomes.into_iter().chain(expired) {
                 match outcome {
-                    Outcome::Placed(p) => {
-                        if let Err(d) = self.insert(p, now) {
+                    Outcome::Placed(p) => match self.insert(p, now) {
+                        Ok(()) => placed = true,
+                        Err(d) => {
                             self.count_drop(&d);
                             self.log_drop(&d, &mut last_log);
                         }
-                    }
+                    },
                     Outcome::Dropped(d) => {
                         self.count_drop(&d);
                         self.log_drop(&d, &mut last_log);
                     }
                 }
+            }
+            // First at the first points placed, then at most every MEMORY_EVERY_MS.
+            let due = match memory_ms {
+                None => placed,
+                Some(t) => now.saturating_sub(t) >= MEMORY_EVERY_MS,
+            };
+            if due {
+                memory_ms = Some(now);
+                self.publish_memory();
             }
         }
     }
@@ -405,5 +449,52 @@ impl Ingest {
         {
             fed.insert(site.to_owned(), now);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ingest(capacity: usize) -> Ingest {
+        Ingest::new(
+            capacity,
+            LiveMapParams::default(),
+            Arc::new(Mutex::new(SensorHub::default())),
+            Arc::new(Views::default()),
+            Arc::new(LiveMaps::default()),
+            None,
+            crate::clock::system(),
+        )
+    }
+
+    fn scan(robot: &str, bytes: usize) -> RawCloud {
+        RawCloud {
+            robot: robot.into(),
+            stream: Stream::Scan,
+            bytes: vec![0; bytes],
+            received: Instant::now(),
+        }
+    }
+
+    #[test]
+    fn queued_bytes_stay_within_the_per_robot_bound_under_a_flood() {
+        let ingest = ingest(4);
+        assert_eq!(ingest.queued_bytes(), 0);
+        // 200 scans of 10 kB from each of two robots, nothing taken: 4 of each stay.
+        for _ in 0..200 {
+            ingest.push(scan("r1", 10_000));
+            ingest.push(scan("r2", 10_000));
+        }
+        let queued = ingest.queued_bytes();
+        assert!(
+            (80_000..90_000).contains(&queued),
+            "{queued} bytes queued for 2 x 4 scans of 10 kB"
+        );
+        // Taken: the payloads go, only the queues' slots stay.
+        for _ in 0..8 {
+            assert!(matches!(ingest.next(), Some(Work::Sensor(_))));
+        }
+        assert!(ingest.queued_bytes() < 2_000, "{} bytes left", ingest.queued_bytes());
     }
 }

@@ -240,6 +240,16 @@ impl Decoded {
         }
     }
 
+    /// Heap bytes of the points or beams, by capacity.
+    fn heap_bytes(&self) -> usize {
+        match self {
+            Self::Cloud(c) => c.points.capacity() * size_of::<[f64; 3]>() + c.header.frame_id.capacity(),
+            Self::Scan(s) => {
+                (s.ranges.capacity() + s.intensities.capacity()) * size_of::<f32>() + s.header.frame_id.capacity()
+            }
+        }
+    }
+
     fn stream(&self) -> Stream {
         match self {
             Self::Cloud(_) => Stream::Cloud,
@@ -332,6 +342,18 @@ impl SensorHub {
         let mut v: Vec<String> = self.robots.keys().cloned().collect();
         v.sort();
         v
+    }
+
+    /// Heap bytes held: every robot's odometry history and the messages waiting for their pose (both bounded:
+    /// `history` by its span, the waiting by `wait_max` per robot). Robots' names and counters are not counted.
+    pub fn memory_bytes(&self) -> usize {
+        self.robots
+            .values()
+            .map(|r| {
+                let waiting: usize = r.waiting.iter().map(|w| w.msg.heap_bytes()).sum();
+                r.history.memory_bytes() + r.waiting.capacity() * size_of::<Waiting>() + waiting
+            })
+            .sum()
     }
 
     /// The robot's newest pose.

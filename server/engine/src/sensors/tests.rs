@@ -234,3 +234,42 @@ fn garbage_is_counted_as_malformed() {
         Some(DropReason::Malformed)
     );
 }
+
+#[test]
+fn memory_counts_what_waits_for_its_pose_within_the_wait_bound_and_lets_it_go() {
+    let mut h = hub(Some("demo"));
+    h.odometry("r1", odom(0.0, SEC), 0);
+    let idle = h.memory_bytes();
+    assert!(idle >= size_of::<Pose2>(), "the pose history: {idle}");
+    // Scans of 1 000 beams stamped after the newest pose: they wait, at most wait_max (3) of them.
+    let beams = 1000;
+    let big = |ns| {
+        encode_laser_scan(&LaserScan {
+            header: header("laser", ns),
+            angle_min: -1.0,
+            angle_max: 1.0,
+            angle_increment: 2.0 / (beams - 1) as f32,
+            range_min: 0.1,
+            range_max: 10.0,
+            ranges: vec![1.0; beams],
+            ..LaserScan::default()
+        })
+    };
+    for k in 0..10 {
+        h.sensor("r1", Stream::Scan, &big(2 * SEC + k), 10 + k as u64);
+    }
+    let waiting = h.memory_bytes() - idle;
+    let scan_bytes = beams * size_of::<f32>();
+    assert!(
+        (3 * scan_bytes..4 * scan_bytes).contains(&waiting),
+        "{waiting} bytes waiting for 3 scans of {scan_bytes}"
+    );
+    // The odometry that places them: they leave the hub, and so do their beams.
+    let out = h.odometry("r1", odom(2.0, 3 * SEC), 20);
+    assert_eq!(placed(&out.released).len(), 3);
+    assert!(
+        h.memory_bytes() < idle + scan_bytes,
+        "{} after release",
+        h.memory_bytes()
+    );
+}

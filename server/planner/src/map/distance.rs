@@ -26,6 +26,11 @@ pub struct DistanceField {
 const PARALLEL_CELLS: usize = 250_000;
 
 impl DistanceField {
+    /// Heap bytes held (the distances and nearest sites, by capacity).
+    pub fn memory_bytes(&self) -> usize {
+        self.dist_m.capacity() * size_of::<f32>() + self.feature.capacity() * size_of::<u32>()
+    }
+
     /// Computes the transform. `is_site(i)` tells whether cell `i` is a site; `border_is_site` adds the ring of
     /// cells around the map as sites.
     pub fn compute(geometry: GridGeometry, is_site: impl Fn(usize) -> bool, border_is_site: bool) -> Self {
