@@ -6,6 +6,7 @@
 //! the engine loop through its handle (`engine_loop::handle`). The fleet's decisions are in `shift-engine`, the
 //! algorithms in `shift-planner`.
 
+pub mod allocator;
 pub mod clock;
 pub mod config;
 pub mod demo;
