@@ -130,6 +130,19 @@ pub struct StoreConfig {
     /// Settled plans kept (ready, done, failed, cancelled); the oldest beyond it are forgotten when a new plan
     /// is accepted. 0 keeps every plan.
     pub retain_plans: usize,
+    /// The database's page cache, MiB (redb's own default is 1 GiB: a daemon that runs for months would
+    /// grow to it as its file does). Reads beyond it go to the file (the OS page cache still helps).
+    pub cache_mb: usize,
+}
+
+impl StoreConfig {
+    /// Checks the values that must not be zero.
+    pub fn validate(&self) -> Result<()> {
+        if self.cache_mb == 0 {
+            return Err(crate::error::DaemonError::config("[store] cache_mb must be at least 1"));
+        }
+        Ok(())
+    }
 }
 
 impl Default for StoreConfig {
@@ -137,6 +150,7 @@ impl Default for StoreConfig {
         Self {
             data_dir: PathBuf::from("./shift-data"),
             retain_plans: 10_000,
+            cache_mb: 64,
         }
     }
 }
@@ -231,6 +245,8 @@ mod tests {
         assert_eq!(c.http.auth_token, Secret::new("tok-9f3q"));
         assert!(!format!("{c:?}").contains("tok-9f3q"), "the token never prints");
         assert!(Config::parse("[http]\nmax_connections = 0").is_ok_and(|c| c.http.validate().is_err()));
+        assert!(Config::parse("[store]\ncache_mb = 0").is_ok_and(|c| c.store.validate().is_err()));
+        assert!(Config::default().store.validate().is_ok());
         let c = Config::parse("[zenoh]\nmapping = { kind = \"rmw_zenoh\", domain = 7 }").expect("rmw_zenoh");
         assert_eq!(c.zenoh.mapping, shift_proto::keys::Ros2Mapping::RmwZenoh { domain: 7 });
         let c = Config::parse("[zenoh.mapping]\nkind = \"bridge_ros2dds\"\nnamespace = \"site1\"").expect("bridge");

@@ -103,12 +103,16 @@ pub async fn run_with_clock(
     clock: SharedClock,
 ) -> Result<()> {
     config.http.validate()?;
+    config.store.validate()?;
     let (auth_token, token_source) =
         crate::http::token::resolve(&config.http.auth_token, &config.http.auth_token_file, &|k| {
             std::env::var(k).ok()
         })?;
     let prometheus = prometheus()?;
-    let store = Arc::new(Store::open(&config.store.data_dir)?);
+    let store = Arc::new(Store::open_with_cache(
+        &config.store.data_dir,
+        config.store.cache_mb.saturating_mul(1 << 20),
+    )?);
     let views = Arc::new(Views::default());
     let (events, _) = broadcast::channel(1024);
     let engine_config = config.engine_config();

@@ -35,6 +35,8 @@ const META: TableDefinition<'_, &str, &[u8]> = TableDefinition::new("meta");
 #[derive(Debug)]
 pub struct Store {
     path: PathBuf,
+    /// The page cache, bytes (kept for reopening).
+    cache_bytes: usize,
     /// `None` after a reopen failed; the next write tries again.
     db: Mutex<Option<Database>>,
     /// An I/O error latched redb (or the reopen failed): reopen before the next write.
@@ -96,9 +98,12 @@ fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
     m.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
 }
 
-/// Opens `path` and makes sure every table exists.
-fn open_db(path: &Path) -> Result<Database, StoreError> {
-    let db = Database::create(path)?;
+/// The page cache when none is configured, bytes ([`crate::config::StoreConfig::cache_mb`]'s default).
+pub const DEFAULT_CACHE_BYTES: usize = 64 << 20;
+
+/// Opens `path` with a page cache of `cache_bytes` and makes sure every table exists.
+fn open_db(path: &Path, cache_bytes: usize) -> Result<Database, StoreError> {
+    let db = redb::Builder::new().set_cache_size(cache_bytes).create(path)?;
     let txn = db.begin_write()?;
     txn.open_table(SITES)?;
     txn.open_table(PLANS)?;
@@ -111,13 +116,19 @@ fn open_db(path: &Path) -> Result<Database, StoreError> {
 }
 
 impl Store {
-    /// Opens (or creates) `DIR/shift.redb`, creating the folder and every table.
+    /// Opens (or creates) `DIR/shift.redb`, creating the folder and every table, with the default page cache.
     pub fn open(data_dir: &Path) -> Result<Self> {
+        Self::open_with_cache(data_dir, DEFAULT_CACHE_BYTES)
+    }
+
+    /// As [`Store::open`], with a page cache of at most `cache_bytes` (`[store] cache_mb`).
+    pub fn open_with_cache(data_dir: &Path, cache_bytes: usize) -> Result<Self> {
         std::fs::create_dir_all(data_dir).with_context(|| format!("creating data dir {}", data_dir.display()))?;
         let path = data_dir.join("shift.redb");
-        let db = open_db(&path).with_context(|| format!("opening store {}", path.display()))?;
+        let db = open_db(&path, cache_bytes).with_context(|| format!("opening store {}", path.display()))?;
         Ok(Self {
             path,
+            cache_bytes,
             db: Mutex::new(Some(db)),
             broken: Mutex::new(None),
         })
@@ -166,7 +177,7 @@ impl Store {
         }
         // redb releases the file when the handle drops; only then can it be opened again.
         drop(db.take());
-        let reopened = open_db(&self.path)?;
+        let reopened = open_db(&self.path, self.cache_bytes)?;
         tracing::info!(path = %self.path.display(), "store reopened after a failed write");
         *db = Some(reopened);
         *broken = None;
