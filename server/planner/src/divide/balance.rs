@@ -55,8 +55,7 @@ impl Table {
                 fields
                     .iter()
                     .map(|fj| {
-                        let s = fj.space.start_cell;
-                        let i = fj.space.geometry().index(s);
+                        let i = fj.space.geometry().index(fj.start_cell);
                         fi.dist[i] - fj.dist[i]
                     })
                     .collect()

@@ -38,7 +38,9 @@ mod work;
 
 use crate::error::{PlannerError, Result};
 use crate::geom::Point2;
-use crate::map::{DistanceField, OccupancyGrid};
+use std::sync::Arc;
+
+use crate::map::{Cell, DistanceField, OccupancyGrid};
 use crate::space::{CoverageSpace, RobotShape};
 use crate::speed::SpeedLimits;
 use crate::speed::attribute::AttributeMap;
@@ -117,26 +119,67 @@ impl Division {
 
 /// What division knows of one robot on the map.
 struct RobotField {
-    /// Its whole space on the map (before confinement).
-    space: CoverageSpace,
-    /// Travel distance from its start to every reachable cell, metres ([`eikonal`]).
+    /// Its whole space on the map (before confinement), shared with the robots of its shape whose docks lie
+    /// on the same reachable set (the space's own start is the first such robot's).
+    space: Arc<CoverageSpace>,
+    /// Distance to the space's reachable set, with the nearest reachable cell of every cell (shared likewise).
+    to_reachable: Arc<DistanceField>,
+    /// Its dock's cell, and the dock (the space's start, or a cell centre when it was moved there).
+    start_cell: Cell,
+    start: Point2,
+    /// Travel distance from its dock to every reachable cell, metres ([`eikonal`]; filled in by
+    /// [`travel_distances`]).
     dist: Vec<f64>,
-    /// Distance to its reachable set, with the nearest reachable cell of every cell.
-    to_reachable: DistanceField,
+}
+
+/// Fills every field's travel distances, the robots shared out over the cores (each march is independent and
+/// sequential, so the result does not depend on the number of threads).
+fn travel_distances(fields: &mut [RobotField]) {
+    let threads = std::thread::available_parallelism()
+        .map_or(1, usize::from)
+        .min(fields.len())
+        .max(1);
+    let chunk = fields.len().div_ceil(threads).max(1);
+    let march = |f: &mut RobotField| {
+        let g = *f.space.geometry();
+        let s = g.index(f.start_cell);
+        f.dist = eikonal::travel_distance(&g, &f.space.reachable, s, (g.center_of(s) - f.start).norm());
+    };
+    std::thread::scope(|scope| {
+        for part in fields.chunks_mut(chunk) {
+            scope.spawn(move || part.iter_mut().for_each(march));
+        }
+    });
 }
 
 impl RobotField {
-    fn new(grid: &OccupancyGrid, robot: &FleetRobot) -> Result<Self> {
-        let space = CoverageSpace::new(grid.clone(), robot.shape, robot.start)?;
-        let g = *space.geometry();
-        let s = g.index(space.start_cell);
-        let dist = eikonal::travel_distance(&g, &space.reachable, s, (g.center_of(s) - space.start).norm());
-        let reachable = &space.reachable;
-        let to_reachable = DistanceField::compute(g, |i| reachable[i], false);
+    /// `earlier`: the fields made so far, whose spaces are reused when `robot` has the same shape and its dock
+    /// stands on one's reachable set with the robot's clearance (the space would come out the same).
+    fn new(grid: &OccupancyGrid, robot: &FleetRobot, earlier: &[RobotField]) -> Result<Self> {
+        let g = grid.geometry;
+        let shared = g.locate(robot.start).and_then(|c| {
+            earlier.iter().find(|f| {
+                f.space.robot == robot.shape
+                    && f.space.reachable[g.index(c)]
+                    && f.space.clearance_at(robot.start) >= robot.shape.radius_m
+            })
+        });
+        let (space, to_reachable, start_cell, start) = match (shared, g.locate(robot.start)) {
+            (Some(f), Some(c)) => (f.space.clone(), f.to_reachable.clone(), c, robot.start),
+            _ => {
+                let space = CoverageSpace::new(grid.clone(), robot.shape, robot.start)?;
+                let reachable = &space.reachable;
+                let to_reachable = DistanceField::compute(g, |i| reachable[i], false);
+                let (c, p) = (space.start_cell, space.start);
+                (Arc::new(space), Arc::new(to_reachable), c, p)
+            }
+        };
         Ok(Self {
             space,
-            dist,
             to_reachable,
+            start_cell,
+            start,
+            dist: Vec::new(),
         })
     }
 }
@@ -166,21 +209,17 @@ pub fn divide(
             reason: format!("must be a non-negative number, got {}", params.balance_tol),
         });
     }
-    let fields = robots
-        .iter()
-        .enumerate()
-        .map(|(k, r)| {
-            RobotField::new(grid, r).map_err(|e| PlannerError::InvalidParam {
-                name: "robots",
-                reason: format!("robots[{k}]: {e}"),
-            })
-        })
-        .collect::<Result<Vec<_>>>()?;
+    let mut fields: Vec<RobotField> = Vec::with_capacity(robots.len());
+    for (k, r) in robots.iter().enumerate() {
+        let f = RobotField::new(grid, r, &fields).map_err(|e| PlannerError::InvalidParam {
+            name: "robots",
+            reason: format!("robots[{k}]: {e}"),
+        })?;
+        fields.push(f);
+    }
+    travel_distances(&mut fields);
     for (k, f) in fields.iter().enumerate() {
-        if let Some(j) = fields[..k]
-            .iter()
-            .position(|o| o.space.start_cell == f.space.start_cell)
-        {
+        if let Some(j) = fields[..k].iter().position(|o| o.start_cell == f.start_cell) {
             return Err(PlannerError::InvalidParam {
                 name: "robots",
                 reason: format!("robots[{k}].start is in the same map cell as robots[{j}].start"),
@@ -215,8 +254,10 @@ pub fn divide(
     for (k, f) in fields.iter().enumerate() {
         let inset = f.space.robot.tool_width_m / 2.0;
         let (keep_reachable, keep_coverable) =
-            ownership::part_masks(&f.space, &owner, k as u32, params.seam_cells, inset);
-        let space = f.space.confined(&keep_reachable, &keep_coverable);
+            ownership::part_masks(&f.space, f.start_cell, &owner, k as u32, params.seam_cells, inset);
+        let space = f
+            .space
+            .confined_from(f.start_cell, f.start, &keep_reachable, &keep_coverable);
         let owned: Vec<usize> = (0..g.len())
             .filter(|&i| owner[i] == k as u32 && f.space.coverable[i])
             .collect();

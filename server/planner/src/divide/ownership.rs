@@ -4,7 +4,7 @@ use std::collections::VecDeque;
 
 use super::balance::Table;
 use super::{NO_OWNER, RobotField};
-use crate::map::DistanceField;
+use crate::map::{Cell, DistanceField};
 use crate::space::{CoverageSpace, flood_fill8};
 
 /// Owner of every grid cell some robot can reach, for `weights` ([`NO_OWNER`] elsewhere).
@@ -28,7 +28,7 @@ pub(super) fn make_connected(fields: &[RobotField], owner: &mut [u32]) -> usize 
         let mine: Vec<bool> = (0..g.len())
             .map(|i| owner[i] == r as u32 && f.space.reachable[i])
             .collect();
-        let kept = flood_fill8(&g, &mine, f.space.start_cell);
+        let kept = flood_fill8(&g, &mine, f.start_cell);
         for i in 0..g.len() {
             if owner[i] == r as u32 && !kept[i] {
                 owner[i] = NO_OWNER;
@@ -94,6 +94,7 @@ pub(super) fn extend_to_coverable(fields: &[RobotField], owner: &mut [u32]) {
 /// from some of its part, the part keeps its full extent.
 pub(super) fn part_masks(
     space: &CoverageSpace,
+    start_cell: Cell,
     owner: &[u32],
     r: u32,
     seam_cells: usize,
@@ -125,7 +126,7 @@ pub(super) fn part_masks(
             *k |= own[i] && space.reachable[i] && to_missing.at(i) <= half;
         }
     }
-    let connected = flood_fill8(g, &keep, space.start_cell);
+    let connected = flood_fill8(g, &keep, start_cell);
     if keep.iter().zip(&connected).all(|(k, c)| k == c) {
         (keep, cover)
     } else {

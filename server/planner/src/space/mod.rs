@@ -182,11 +182,23 @@ impl CoverageSpace {
     /// in `keep_coverable` within tool_width / 2 of those are to be covered. The start stays where it is;
     /// when its cell is not kept, nothing is reachable and nothing coverable.
     pub fn confined(&self, keep_reachable: &[bool], keep_coverable: &[bool]) -> Self {
+        self.confined_from(self.start_cell, self.start, keep_reachable, keep_coverable)
+    }
+
+    /// As [`CoverageSpace::confined`], for another robot of the same shape whose start `start` (in cell
+    /// `start_cell`, on this space's reachable set) replaces this space's: one space serves a fleet's docks.
+    pub fn confined_from(
+        &self,
+        start_cell: Cell,
+        start: Point2,
+        keep_reachable: &[bool],
+        keep_coverable: &[bool],
+    ) -> Self {
         let g = *self.geometry();
         let kept: Vec<bool> = (0..g.len())
             .map(|i| self.reachable[i] && keep_reachable.get(i).copied().unwrap_or(false))
             .collect();
-        let reachable = flood_fill8(&g, &kept, self.start_cell);
+        let reachable = flood_fill8(&g, &kept, start_cell);
         let to_reachable = DistanceField::compute(g, |i| reachable[i], false);
         let half = self.robot.tool_width_m / 2.0 + 1e-9;
         let coverable = (0..g.len())
@@ -199,9 +211,14 @@ impl CoverageSpace {
             traversable: self.traversable.clone(),
             reachable,
             coverable,
-            start_cell: self.start_cell,
-            start: self.start,
-            warnings: self.warnings.clone(),
+            start_cell,
+            start,
+            // The remarks are about this space's own start.
+            warnings: if start_cell == self.start_cell {
+                self.warnings.clone()
+            } else {
+                Vec::new()
+            },
         }
     }
 
