@@ -188,8 +188,8 @@ impl RobotField {
 /// expected times when given (it must have the grid's geometry). `calibration[i]` multiplies the expected
 /// time on cell i (1 without knowledge; a caller that planned the parts can pass each part's planned over
 /// expected duration on its cells, to correct for the turns and transits the estimate does not see: they
-/// belong to the place, short lanes between shelves or a long way from the dock, more than to the robot). Errors name the robot: a start off
-/// the map or where the robot fits nowhere, two starts in one cell.
+/// belong to the place, short lanes between shelves or a long way from the dock, more than to the robot).
+/// Errors name the robot: a start off the map or where the robot fits nowhere, two starts in one cell.
 pub fn divide(
     grid: &OccupancyGrid,
     robots: &[FleetRobot],
@@ -217,7 +217,6 @@ pub fn divide(
         })?;
         fields.push(f);
     }
-    travel_distances(&mut fields);
     for (k, f) in fields.iter().enumerate() {
         if let Some(j) = fields[..k].iter().position(|o| o.start_cell == f.start_cell) {
             return Err(PlannerError::InvalidParam {
@@ -226,6 +225,7 @@ pub fn divide(
             });
         }
     }
+    travel_distances(&mut fields);
     let g = grid.geometry;
     if attribute.is_some_and(|a| *a.geometry() != g) {
         return Err(PlannerError::InvalidParam {
