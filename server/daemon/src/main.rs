@@ -408,6 +408,18 @@ fn cmd_plan(args: PlanArgs) -> Result<()> {
     Ok(())
 }
 
+/// Prints one evaluation row: a JSON line, or `line(row)` under the table's header.
+fn print_row<R: serde::Serialize>(json: bool, row: &R, line: impl Fn(&R) -> String) {
+    if json {
+        match serde_json::to_string(row) {
+            Ok(s) => println!("{s}"),
+            Err(e) => eprintln!("error: {e}"),
+        }
+    } else {
+        println!("{}", line(row));
+    }
+}
+
 fn cmd_eval(args: EvalArgs) -> Result<()> {
     if !args.robots.is_empty() {
         if let Some(bad) = args.robots.iter().find(|&&n| n == 0) {
@@ -417,14 +429,7 @@ fn cmd_eval(args: EvalArgs) -> Result<()> {
             println!("{FLEET_TABLE_HEADER}");
         }
         run_fleet_eval(&args.scenes, &args.robots, args.render.as_deref(), |row| {
-            if args.json {
-                match serde_json::to_string(row) {
-                    Ok(s) => println!("{s}"),
-                    Err(e) => eprintln!("error: {e}"),
-                }
-            } else {
-                println!("{}", fleet_table_line(row));
-            }
+            print_row(args.json, row, fleet_table_line)
         })?;
         return Ok(());
     }
@@ -432,14 +437,7 @@ fn cmd_eval(args: EvalArgs) -> Result<()> {
         println!("{TABLE_HEADER}");
     }
     run_eval(&args.scenes, args.render.as_deref(), |row| {
-        if args.json {
-            match serde_json::to_string(row) {
-                Ok(s) => println!("{s}"),
-                Err(e) => eprintln!("error: {e}"),
-            }
-        } else {
-            println!("{}", table_line(row));
-        }
+        print_row(args.json, row, table_line)
     })?;
     Ok(())
 }
