@@ -47,13 +47,13 @@ pub struct RobotSpec {
     pub a_max: f64,
 }
 
-fn default_v_min() -> f64 {
+pub(crate) fn default_v_min() -> f64 {
     0.1
 }
-fn default_v_max() -> f64 {
+pub(crate) fn default_v_max() -> f64 {
     1.0
 }
-fn default_a_max() -> f64 {
+pub(crate) fn default_a_max() -> f64 {
     0.5
 }
 
@@ -277,6 +277,9 @@ pub struct PlanStatusResponse {
     /// carried, relocalised, or went back), the latest last.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub progress_jumps: Vec<ProgressJump>,
+    /// The mission it is a part of (`/v1/missions/{id}`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mission: Option<String>,
     /// When the request was accepted, milliseconds since the Unix epoch.
     pub created_ms: u64,
     /// Last status change, milliseconds since the Unix epoch.

@@ -10,6 +10,7 @@ pub mod correction;
 pub mod error;
 pub mod keys;
 pub mod listing;
+pub mod mission;
 pub mod plan;
 pub mod ros;
 pub mod scene;
@@ -23,5 +24,8 @@ pub use attribute::{AttributeBlobDoc, AttributeDoc};
 pub use correction::{CorrectionDoc, CorrectionError, CorrectionReason};
 pub use error::CodecError;
 pub use listing::{OccupancyGridDoc, PLAN_PAGE_DEFAULT, PLAN_PAGE_MAX, PlanList, PlanListQuery, SiteList};
+pub use mission::{
+    MissionAccepted, MissionCoverage, MissionPlanView, MissionRequest, MissionRobot, MissionStatus, MissionView,
+};
 pub use plan::{PlanDocument, PlanMetricsDoc, RegionDoc, WaypointDoc, WaypointKindDoc};
 pub use scene::SceneFile;

@@ -8,7 +8,10 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
-use shift_engine::{Event, JobOutcome, LiveMaps, PlanJob, run_job, to_document};
+use shift_engine::{
+    Event, JobOutcome, LiveMaps, MissionJob, MissionOutcome, PlanJob, planned_outcome, run_job, run_mission_job,
+    to_document,
+};
 use shift_planner::PlannerError;
 use shift_planner::geom::Point2;
 use shift_planner::pipeline::{PlanMonitor, RegionSummary};
@@ -125,6 +128,39 @@ impl JobRunner {
             };
             // The engine must learn of every end, so this one waits for room.
             let _ = to_engine.blocking_tell(Msg::event(Event::JobFinished { plan_id, outcome }));
+        });
+    }
+
+    /// Starts a mission job: the site divided among the fleet and every part planned, as one job on the plan
+    /// pool. It cannot stop half-way (division and its planning rounds run to the end); a cancel or a shutdown
+    /// takes effect when it ends (the engine ignores the outcome of a cancelled mission).
+    pub fn start_mission(&mut self, mut job: MissionJob) {
+        let to_engine = self.to_engine.clone();
+        let overlay = self.overlay.clone();
+        let interrupt = self.interrupt.clone();
+        self.pool.spawn(move || {
+            if let Some(live) = overlay {
+                job.overlay = live_overlay(&live, &job.request.site);
+            }
+            let mission_id = job.mission_id.clone();
+            let t = Instant::now();
+            let result = std::panic::catch_unwind(AssertUnwindSafe(|| run_mission_job(&job)));
+            let compute_ms = t.elapsed().as_secs_f64() * 1e3;
+            let outcome = match result {
+                _ if interrupt.load(Ordering::Relaxed) => MissionOutcome::Interrupted,
+                Ok(Ok(fleet)) => {
+                    metrics::histogram!("shift_mission_compute_seconds").record(compute_ms / 1e3);
+                    planned_outcome(&job, &fleet, compute_ms)
+                }
+                Ok(Err(e)) => MissionOutcome::Failed { reason: e.to_string() },
+                Err(_) => {
+                    tracing::error!(mission_id, "mission job panicked");
+                    MissionOutcome::Failed {
+                        reason: "internal planner error (logged)".into(),
+                    }
+                }
+            };
+            let _ = to_engine.blocking_tell(Msg::event(Event::MissionFinished { mission_id, outcome }));
         });
     }
 

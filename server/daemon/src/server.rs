@@ -115,6 +115,7 @@ pub async fn run_with_clock(
     )?);
     let views = Arc::new(Views::default());
     let (events, _) = broadcast::channel(1024);
+    let (mission_events, _) = broadcast::channel(256);
     let engine_config = config.engine_config();
     let engine = Engine::new(engine_config.clone());
     let zenoh = if config.zenoh.enabled {
@@ -138,6 +139,7 @@ pub async fn run_with_clock(
             store: store.clone(),
             views: views.clone(),
             events: events.clone(),
+            mission_events: mission_events.clone(),
             publisher: zenoh.as_ref().map(|z| z.publisher.clone()),
             live: live.clone(),
             overlay: config.jobs.live_overlay,
@@ -176,6 +178,7 @@ pub async fn run_with_clock(
         sensors,
         clock,
         events,
+        mission_events,
         shutdown: token.clone(),
         prometheus,
         auth_token: Arc::new(auth_token),
@@ -234,7 +237,7 @@ async fn restore(
     clock: &SharedClock,
 ) -> Result<()> {
     let s = store.clone();
-    let (sites, plans, active) = tokio::task::spawn_blocking(move || -> Result<_> {
+    let (sites, plans, active, missions, coverage) = tokio::task::spawn_blocking(move || -> Result<_> {
         let mut sites = Vec::new();
         for rec in s.sites()? {
             let site = rec.site.clone();
@@ -251,7 +254,7 @@ async fn restore(
                 active.push(Arc::new(doc));
             }
         }
-        Ok((sites, plans, active))
+        Ok((sites, plans, active, s.missions()?, s.coverage()?))
     })
     .await
     .map_err(|e| crate::err!("restoring from the store: {e}"))??;
@@ -265,9 +268,19 @@ async fn restore(
         sites = sites.len(),
         plans = plans.len(),
         driven = active.len(),
+        missions = missions.len(),
+        rasters = coverage.len(),
         "restoring from the store"
     );
-    engine.call(Event::Restore { sites, plans, active }).await?;
+    engine
+        .call(Event::Restore {
+            sites,
+            plans,
+            active,
+            missions,
+            coverage,
+        })
+        .await?;
     // Computed plans are served again from their stored documents, corrections applied.
     for id in finished {
         if let Some(doc) = store.current(&id)? {

@@ -15,7 +15,7 @@ use std::sync::{Mutex, MutexGuard};
 
 use redb::{Database, ReadableDatabase, ReadableTable, TableDefinition};
 use serde::{Serialize, de::DeserializeOwned};
-use shift_engine::{Command, PlanRecord, SiteRecord};
+use shift_engine::{Command, CoverageRecord, MissionRecord, PlanRecord, SiteRecord};
 use shift_proto::{CorrectionDoc, PlanDocument};
 
 use self::fault::{FaultKind, StoreError};
@@ -28,6 +28,10 @@ const RESULTS: TableDefinition<'_, &str, &[u8]> = TableDefinition::new("results"
 const TRANSITIONS: TableDefinition<'_, (&str, u32), &[u8]> = TableDefinition::new("transitions");
 /// (plan id, version produced) → correction JSON.
 const CORRECTIONS: TableDefinition<'_, (&str, u64), &[u8]> = TableDefinition::new("corrections");
+/// Mission id → mission record.
+const MISSIONS: TableDefinition<'_, &str, &[u8]> = TableDefinition::new("missions");
+/// `site/NAME` or `mission/ID` → measured coverage raster (run lengths).
+const COVERAGE: TableDefinition<'_, &str, &[u8]> = TableDefinition::new("coverage");
 /// Small bookkeeping: `probe` → the time of the last recovery probe.
 const META: TableDefinition<'_, &str, &[u8]> = TableDefinition::new("meta");
 
@@ -59,6 +63,10 @@ pub enum Write<'a> {
     },
     /// A settled plan forgotten (`retain_plans`): its record, document, corrections and history.
     Forget(&'a str),
+    /// A mission record.
+    Mission(&'a MissionRecord),
+    /// A measured coverage raster.
+    Coverage(&'a CoverageRecord),
     /// A correction and the plan record at its version.
     Correction {
         /// The record at the new version.
@@ -77,6 +85,8 @@ impl<'a> Write<'a> {
             Command::StoreResult { plan_id, doc } => Self::Result { plan_id, doc },
             Command::StoreCorrection { record, correction, .. } => Self::Correction { record, correction },
             Command::ForgetPlan { plan_id } => Self::Forget(plan_id),
+            Command::StoreMission(rec) => Self::Mission(rec),
+            Command::StoreCoverage(rec) => Self::Coverage(rec),
             _ => return None,
         })
     }
@@ -111,6 +121,8 @@ fn open_db(path: &Path, cache_bytes: usize) -> Result<Database, StoreError> {
     txn.open_table(TRANSITIONS)?;
     txn.open_table(CORRECTIONS)?;
     txn.open_table(META)?;
+    txn.open_table(MISSIONS)?;
+    txn.open_table(COVERAGE)?;
     txn.commit()?;
     Ok(db)
 }
@@ -199,6 +211,16 @@ impl Store {
                     txn.open_table(RESULTS)?.insert(plan_id, bytes.as_slice())?;
                 }
                 Write::Forget(plan_id) => forget_plan(&txn, plan_id)?,
+                Write::Mission(rec) => {
+                    let bytes = serde_json::to_vec(rec)?;
+                    txn.open_table(MISSIONS)?
+                        .insert(rec.mission_id.as_str(), bytes.as_slice())?;
+                }
+                Write::Coverage(rec) => {
+                    let bytes = serde_json::to_vec(rec)?;
+                    txn.open_table(COVERAGE)?
+                        .insert(rec.key.store_key().as_str(), bytes.as_slice())?;
+                }
                 Write::Correction { record, correction } => {
                     let bytes = serde_json::to_vec(correction)?;
                     txn.open_table(CORRECTIONS)?
@@ -275,6 +297,16 @@ impl Store {
     /// Every plan record.
     pub fn plans(&self) -> Result<Vec<PlanRecord>> {
         self.all(PLANS, "plan")
+    }
+
+    /// Every mission record.
+    pub fn missions(&self) -> Result<Vec<MissionRecord>> {
+        self.all(MISSIONS, "mission")
+    }
+
+    /// Every measured coverage raster.
+    pub fn coverage(&self) -> Result<Vec<CoverageRecord>> {
+        self.all(COVERAGE, "coverage raster")
     }
 
     /// A plan's document.
@@ -392,6 +424,7 @@ mod tests {
             missed: Vec::new(),
             watch: None,
             progress_jumps: Vec::new(),
+            mission: None,
             attempts: 0,
             created_ms: 0,
             updated_ms: at,

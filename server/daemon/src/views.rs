@@ -4,9 +4,9 @@
 use std::collections::{BTreeMap, HashMap};
 use std::sync::{Arc, RwLock};
 
-use shift_engine::PlanRecord;
+use shift_engine::{CoverageKey, CoverageRecord, PlanRecord};
 use shift_planner::map::OccupancyGrid;
-use shift_proto::{PlanDocument, PlanStatus, PlanStatusResponse, RegionReady, RobotView, SiteSummary};
+use shift_proto::{MissionView, PlanDocument, PlanStatus, PlanStatusResponse, RegionReady, RobotView, SiteSummary};
 
 /// One plan as the API shows it.
 #[derive(Debug, Clone)]
@@ -27,6 +27,9 @@ pub struct Views {
     sites: RwLock<BTreeMap<String, SiteSummary>>,
     site_maps: RwLock<HashMap<String, Arc<OccupancyGrid>>>,
     robots: RwLock<BTreeMap<String, RobotView>>,
+    missions: RwLock<HashMap<String, MissionView>>,
+    /// Each site's measured coverage raster, as the engine last sent it (about once a second while robots sweep).
+    coverage: RwLock<HashMap<String, Arc<CoverageRecord>>>,
     /// Why the store does not write now (`/readyz` tells).
     store_fault: RwLock<Option<crate::store::fault::StoreError>>,
 }
@@ -184,6 +187,33 @@ impl Views {
     pub fn set_site(&self, summary: SiteSummary) {
         if let Ok(mut sites) = self.sites.write() {
             sites.insert(summary.site.clone(), summary);
+        }
+    }
+
+    /// A mission's view.
+    pub fn mission(&self, mission_id: &str) -> Option<MissionView> {
+        self.missions.read().ok()?.get(mission_id).cloned()
+    }
+
+    /// Sets a mission's view.
+    pub fn set_mission(&self, view: MissionView) {
+        if let Ok(mut m) = self.missions.write() {
+            m.insert(view.mission_id.clone(), view);
+        }
+    }
+
+    /// A site's measured coverage raster.
+    pub fn coverage(&self, site: &str) -> Option<Arc<CoverageRecord>> {
+        self.coverage.read().ok()?.get(site).cloned()
+    }
+
+    /// Sets a site's measured coverage raster (mission rasters are not served whole; their figure is in the
+    /// mission's view).
+    pub fn set_coverage(&self, record: Arc<CoverageRecord>) {
+        if let CoverageKey::Site(site) = &record.key
+            && let Ok(mut c) = self.coverage.write()
+        {
+            c.insert(site.clone(), record.clone());
         }
     }
 

@@ -4,6 +4,7 @@
 
 mod events;
 mod fleet;
+mod missions;
 mod plans;
 
 use std::sync::Arc;
@@ -13,7 +14,10 @@ use std::collections::{BTreeMap, HashMap, HashSet, VecDeque};
 use shift_proto::{PlanEvent, PlanStatus, PoseView, RobotView, SiteSummary};
 
 pub use self::events::{Command, Event, JobOutcome};
+use self::missions::MissionState;
+use crate::coverage::{CoverageKey, CoverageRecord, Raster};
 use crate::error::Result;
+use crate::mission::MissionRecord;
 use crate::plan::PlanRecord;
 use crate::progress::ProgressParams;
 use crate::robots::{Assignment, Robot, Robots};
@@ -69,6 +73,13 @@ pub struct Engine {
     robots: Robots,
     next_seq: u64,
     draining: bool,
+    /// Missions by id.
+    missions: HashMap<String, MissionState>,
+    /// Measured coverage of every plan driven on a site, by site.
+    site_coverage: HashMap<String, Arc<Raster>>,
+    /// When rasters were last sent to the store and to the read model, milliseconds.
+    coverage_stored_ms: u64,
+    coverage_viewed_ms: u64,
 }
 
 impl Engine {
@@ -93,7 +104,16 @@ impl Engine {
     pub fn handle(&mut self, event: Event, now_ms: u64) -> Result<Vec<Command>> {
         let mut out = Vec::new();
         match event {
-            Event::Restore { sites, plans, active } => self.restore(sites, plans, active, now_ms, &mut out),
+            Event::Restore {
+                sites,
+                plans,
+                active,
+                missions,
+                coverage,
+            } => {
+                self.restore(sites, plans, active, now_ms, &mut out);
+                self.restore_missions(missions, coverage, now_ms, &mut out);
+            }
             Event::MapUploaded { site } => {
                 validate_site_name(&site.record.site)?;
                 let site = Site::from(site);
@@ -147,15 +167,47 @@ impl Engine {
                 outcome,
                 compute_us,
             } => self.check_finished(&robot, &plan_id, base_version, outcome, compute_us, now_ms, &mut out),
-            Event::Shutdown => self.draining = true,
+            Event::MissionRequested { request } => self.request_mission(request, now_ms, &mut out)?,
+            Event::MissionCancelRequested { mission_id } => self.cancel_mission(&mission_id, now_ms, &mut out)?,
+            Event::MissionAssignRequested { mission_id, docs } => {
+                self.assign_mission(&mission_id, docs, now_ms, &mut out)?;
+            }
+            Event::MissionFinished { mission_id, outcome } => {
+                self.mission_finished(&mission_id, outcome, now_ms, &mut out);
+            }
+            Event::Shutdown => {
+                self.draining = true;
+                self.flush_coverage(now_ms, true, true, &mut out);
+            }
         }
         self.pump(now_ms, &mut out);
+        if !self.missions.is_empty() {
+            self.refresh_touched_missions(now_ms, &mut out);
+        }
+        let plan_ended = (out.iter()).any(|c| matches!(c, Command::StorePlan(r) if r.status == PlanStatus::Done));
+        let restored = out.iter().any(|c| matches!(c, Command::SiteStatic { .. }));
+        self.flush_coverage(now_ms, false, plan_ended || restored, &mut out);
         Ok(out)
     }
 
     /// A plan's record.
     pub fn plan(&self, plan_id: &str) -> Option<&PlanRecord> {
         self.plans.get(plan_id)
+    }
+
+    /// A mission's record.
+    pub fn mission(&self, mission_id: &str) -> Option<&MissionRecord> {
+        self.missions.get(mission_id).map(|m| &m.record)
+    }
+
+    /// The measured coverage raster of a site (`CoverageKey::Site`) or a mission.
+    pub fn coverage(&self, key: &CoverageKey) -> Option<CoverageRecord> {
+        match key {
+            CoverageKey::Site(s) => self.site_coverage.get(s).map(|r| r.record(key.clone())),
+            CoverageKey::Mission(m) => (self.missions.get(m))
+                .and_then(|m| m.raster.as_ref())
+                .map(|r| r.record(key.clone())),
+        }
     }
 
     /// A site's summary.
@@ -228,6 +280,8 @@ impl Engine {
 
 #[cfg(test)]
 mod fleet_tests;
+#[cfg(test)]
+mod mission_tests;
 #[cfg(test)]
 mod tests;
 #[cfg(test)]

@@ -1,6 +1,6 @@
 //! The engine's error type: every way an event can be refused. The daemon maps each variant to one HTTP status.
 
-use shift_proto::PlanStatus;
+use shift_proto::{MissionStatus, PlanStatus};
 use thiserror::Error;
 
 /// Why the engine refused an event.
@@ -25,6 +25,19 @@ pub enum EngineError {
         plan_id: String,
         /// Its status.
         status: PlanStatus,
+        /// What was asked.
+        action: &'static str,
+    },
+    /// No mission of that id (HTTP 404).
+    #[error("unknown mission {0:?}")]
+    UnknownMission(String),
+    /// The action does not apply to the mission's current status (HTTP 409).
+    #[error("mission {mission_id} is {status}; cannot {action}", status = .status.as_str())]
+    MissionState {
+        /// The mission.
+        mission_id: String,
+        /// Its status.
+        status: MissionStatus,
         /// What was asked.
         action: &'static str,
     },

@@ -63,7 +63,7 @@ pub fn attribute_map(doc: &AttributeDoc, geometry: GridGeometry) -> shift_planne
 }
 
 /// The planner's objective for the wire's.
-fn objective(o: PlanObjective) -> Objective {
+pub(crate) fn objective(o: PlanObjective) -> Objective {
     match o {
         PlanObjective::Time => Objective::Time,
         PlanObjective::Length => Objective::Length,

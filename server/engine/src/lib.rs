@@ -12,12 +12,16 @@
 //! the engine deterministically. [`sensors::SensorHub`] is driven by the daemon's ingest thread the same way
 //! (messages and the time in, placed points and drops out). No tokio, no sockets, no clock: time is passed in.
 
+pub mod cell_mask;
+pub mod coverage;
 mod engine;
 pub mod error;
 pub mod job;
 pub mod live_map;
 pub mod live_maps;
 pub(crate) mod lossless_f64;
+pub mod mission;
+pub mod mission_job;
 pub mod plan;
 pub mod plan_doc;
 pub mod pose_history;
@@ -29,11 +33,14 @@ pub mod sensors;
 pub mod site;
 pub mod watch;
 
+pub use coverage::{CoverageKey, CoverageRecord};
 pub use engine::{Command, Engine, EngineConfig, Event, JobOutcome};
 pub use error::EngineError;
 pub use job::{JobResult, PlanJob, attribute_map, run_job};
 pub use live_map::{LiveMap, LiveMapParams, LiveMapStats};
 pub use live_maps::{LiveMaps, SiteLive};
+pub use mission::MissionRecord;
+pub use mission_job::{MissionJob, MissionOutcome, planned_outcome, run_mission_job};
 pub use plan::PlanRecord;
 pub use plan_doc::to_document;
 pub use pose_history::{PoseHistory, PoseHistoryParams, PoseLookupError};

@@ -44,6 +44,9 @@ pub struct PlanRecord {
     /// Progress found away from where the robot was expected, the latest [`MAX_JUMPS`] kept.
     #[serde(default)]
     pub progress_jumps: Vec<ProgressJump>,
+    /// The mission it is a part of (its robot's share of the mission's site).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mission: Option<String>,
     /// How many times a worker started it.
     pub attempts: u32,
     /// Accepted at, milliseconds since the Unix epoch.
@@ -53,6 +56,31 @@ pub struct PlanRecord {
 }
 
 impl PlanRecord {
+    /// A plan just accepted: queued, nothing computed.
+    pub fn queued(plan_id: String, seq: u64, request: PlanRequest, now_ms: u64) -> Self {
+        Self {
+            plan_id,
+            seq,
+            request,
+            status: PlanStatus::Queued,
+            progress: 0.0,
+            version: 0,
+            regions_ready: 0,
+            metrics: None,
+            error: None,
+            warnings: Vec::new(),
+            robot: None,
+            driven_fraction: 0.0,
+            missed: Vec::new(),
+            watch: None,
+            progress_jumps: Vec::new(),
+            mission: None,
+            attempts: 0,
+            created_ms: now_ms,
+            updated_ms: now_ms,
+        }
+    }
+
     /// The `GET /v1/plans/{id}` body.
     pub fn to_response(&self) -> PlanStatusResponse {
         PlanStatusResponse {
@@ -71,6 +99,7 @@ impl PlanRecord {
             corrections: self.version.saturating_sub(1),
             watch: self.watch,
             progress_jumps: self.progress_jumps.clone(),
+            mission: self.mission.clone(),
             created_ms: self.created_ms,
             updated_ms: self.updated_ms,
         }

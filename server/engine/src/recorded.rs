@@ -220,6 +220,32 @@ pub enum Decision {
         /// Plan.
         plan_id: String,
     },
+    /// [`Command::StartMission`].
+    StartMission {
+        /// Mission id.
+        mission_id: String,
+    },
+    /// [`Command::StoreMission`]: a mission's record is persisted.
+    StoreMission {
+        /// Mission id.
+        mission_id: String,
+        /// Its status.
+        status: shift_proto::MissionStatus,
+    },
+    /// [`Command::MissionChanged`].
+    Mission {
+        /// The mission's view.
+        view: shift_proto::MissionView,
+    },
+    /// [`Command::StoreCoverage`] (`stored`) and [`Command::CoverageChanged`]: a measured raster.
+    Coverage {
+        /// Whose.
+        key: crate::coverage::CoverageKey,
+        /// Run lengths of its swept cells.
+        runs: usize,
+        /// To the store (else to the read model).
+        stored: bool,
+    },
     /// [`Command::FeedSite`]: where a robot's sensor data goes.
     FeedSite {
         /// Robot.
@@ -240,6 +266,7 @@ impl Decision {
             corrections: 0,
             watch: None,
             progress_jumps: Vec::new(),
+            mission: None,
             ..s.clone()
         };
         let view_v1 = |v: &RobotView| RobotView {
@@ -319,6 +346,24 @@ impl From<&Command> for Decision {
             },
             Command::ForgetPlan { plan_id } => Self::ForgetPlan {
                 plan_id: plan_id.clone(),
+            },
+            Command::StartMission(job) => Self::StartMission {
+                mission_id: job.mission_id.clone(),
+            },
+            Command::StoreMission(rec) => Self::StoreMission {
+                mission_id: rec.mission_id.clone(),
+                status: rec.status,
+            },
+            Command::MissionChanged(view) => Self::Mission { view: view.clone() },
+            Command::StoreCoverage(rec) => Self::Coverage {
+                key: rec.key.clone(),
+                runs: rec.covered.runs.len(),
+                stored: true,
+            },
+            Command::CoverageChanged(rec) => Self::Coverage {
+                key: rec.key.clone(),
+                runs: rec.covered.runs.len(),
+                stored: false,
             },
         }
     }

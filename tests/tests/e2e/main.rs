@@ -11,4 +11,5 @@ mod fuzz_feed;
 mod fuzz_regressions;
 mod http_api;
 mod listings;
+mod missions;
 mod record_replay;

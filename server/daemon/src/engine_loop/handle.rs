@@ -4,7 +4,7 @@
 use std::time::Instant;
 
 use shift_engine::{EngineError, Event, PlanRecord};
-use shift_proto::SiteSummary;
+use shift_proto::{MissionView, SiteSummary};
 use tokio::sync::{mpsc, oneshot, watch};
 
 /// Capacity of the engine's inbox; handlers wait for room (back-pressure), progress reports are dropped.
@@ -17,6 +17,8 @@ pub struct Reply {
     pub plans: Vec<PlanRecord>,
     /// Site summaries changed by the event.
     pub sites: Vec<SiteSummary>,
+    /// Mission views changed by the event (the accepted mission first).
+    pub missions: Vec<MissionView>,
 }
 
 /// Why an event was not carried out.

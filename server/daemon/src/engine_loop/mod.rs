@@ -12,7 +12,7 @@ use std::time::{Duration, Instant};
 
 use shift_engine::sensors::SensorHub;
 use shift_engine::{Command, Engine, Event, LiveMaps};
-use shift_proto::PlanEvent;
+use shift_proto::{MissionView, PlanEvent};
 use tokio::sync::{broadcast, mpsc, watch};
 
 use self::durability::Durability;
@@ -37,6 +37,8 @@ pub struct LoopParts {
     pub views: Arc<Views>,
     /// Plan events for SSE subscribers.
     pub events: broadcast::Sender<PlanEvent>,
+    /// Mission views for SSE subscribers.
+    pub mission_events: broadcast::Sender<MissionView>,
     /// Plans, corrections and plan status out to Zenoh (none without Zenoh).
     pub publisher: Option<Publisher>,
     /// Every site's live map: path checks read it, and the site's static map is handed to it.
@@ -103,6 +105,7 @@ impl EngineLoop {
                         .record(started.saturating_duration_since(sent).as_secs_f64());
                     let finished = match event.as_ref() {
                         Event::JobFinished { plan_id, .. } => Some(plan_id.clone()),
+                        Event::MissionFinished { mission_id, .. } => Some(mission_id.clone()),
                         _ => None,
                     };
                     let result = self.on_event(*event);
@@ -221,6 +224,18 @@ impl EngineLoop {
                     self.plans_changed = true;
                     self.jobs.start(job);
                 }
+                Command::StartMission(job) => {
+                    self.plans_changed = true;
+                    self.jobs.start_mission(*job);
+                }
+                Command::StoreMission(_) | Command::StoreCoverage(_) => {}
+                Command::MissionChanged(view) => {
+                    p.views.set_mission(view.clone());
+                    // No subscriber is not an error.
+                    let _ = p.mission_events.send(view.clone());
+                    reply.missions.push(view);
+                }
+                Command::CoverageChanged(record) => p.views.set_coverage(record),
                 Command::CancelJob { plan_id } => {
                     self.plans_changed = true;
                     self.jobs.cancel(&plan_id);

@@ -91,16 +91,18 @@ impl From<EngineError> for ApiError {
     fn from(e: EngineError) -> Self {
         let status = match &e {
             EngineError::InvalidRequest(_) | EngineError::Map(_) => StatusCode::BAD_REQUEST,
-            EngineError::UnknownSite(_) | EngineError::UnknownPlan(_) => StatusCode::NOT_FOUND,
-            EngineError::InvalidState { .. } => StatusCode::CONFLICT,
+            EngineError::UnknownSite(_) | EngineError::UnknownPlan(_) | EngineError::UnknownMission(_) => {
+                StatusCode::NOT_FOUND
+            }
+            EngineError::InvalidState { .. } | EngineError::MissionState { .. } => StatusCode::CONFLICT,
             EngineError::QueueFull { .. } => StatusCode::TOO_MANY_REQUESTS,
             EngineError::ShuttingDown => StatusCode::SERVICE_UNAVAILABLE,
         };
         let code = match &e {
             EngineError::InvalidRequest(_) => "invalid_request",
             EngineError::Map(_) => "invalid_map",
-            EngineError::UnknownSite(_) | EngineError::UnknownPlan(_) => "not_found",
-            EngineError::InvalidState { .. } => "invalid_state",
+            EngineError::UnknownSite(_) | EngineError::UnknownPlan(_) | EngineError::UnknownMission(_) => "not_found",
+            EngineError::InvalidState { .. } | EngineError::MissionState { .. } => "invalid_state",
             EngineError::QueueFull { .. } => "queue_full",
             EngineError::ShuttingDown => "shutting_down",
         };

@@ -147,6 +147,7 @@ mod tests {
             corrections: 0,
             watch: None,
             progress_jumps: Vec::new(),
+            mission: None,
             created_ms: 0,
             updated_ms: 0,
         })

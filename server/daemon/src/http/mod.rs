@@ -11,6 +11,7 @@ pub mod error;
 mod events;
 mod json_errors;
 mod listings;
+mod missions;
 mod openapi;
 mod ops;
 mod plans;
@@ -60,6 +61,8 @@ pub struct AppState {
     pub clock: SharedClock,
     /// Plan events, for SSE subscribers.
     pub events: broadcast::Sender<PlanEvent>,
+    /// Mission views, for SSE subscribers.
+    pub mission_events: broadcast::Sender<shift_proto::MissionView>,
     /// Cancelled on shutdown (ends event streams).
     pub shutdown: CancellationToken,
     /// Prometheus exposition.
@@ -105,6 +108,16 @@ pub fn router(state: AppState) -> Router {
             "/v1/plans/{id}/assign",
             limited(post(robots::assign_plan), state.body_limits.request_bytes),
         )
+        .route("/v1/sites/{site}/coverage", get(missions::get_site_coverage))
+        .route(
+            "/v1/missions",
+            limited(post(missions::create_mission), state.body_limits.request_bytes),
+        )
+        .route(
+            "/v1/missions/{id}",
+            get(missions::get_mission).delete(missions::cancel_mission),
+        )
+        .route("/v1/missions/{id}/assign", post(missions::assign_mission))
         .route("/v1/robots", get(robots::list_robots))
         .route("/v1/robots/{id}", get(robots::get_robot))
         .layer(TimeoutLayer::with_status_code(
@@ -113,6 +126,7 @@ pub fn router(state: AppState) -> Router {
         ))
         // Event streams live long: no timeout (a reader that stops reading is cut by `serve`'s write stall).
         .route("/v1/plans/{id}/events", get(events::plan_events))
+        .route("/v1/missions/{id}/events", get(missions::mission_events))
         .route_layer(axum::middleware::from_fn_with_state(
             state.auth_token.clone(),
             auth::require_token,

@@ -24,11 +24,17 @@ use utoipa::OpenApi;
         super::robots::list_robots,
         super::robots::get_robot,
         super::events::plan_events,
+        super::missions::create_mission,
+        super::missions::get_mission,
+        super::missions::assign_mission,
+        super::missions::cancel_mission,
+        super::missions::mission_events,
+        super::missions::get_site_coverage,
         super::ops::healthz,
         super::ops::readyz,
         super::ops::metrics_text,
     ),
-    tags((name = "plans"), (name = "sites"), (name = "robots"), (name = "ops"))
+    tags((name = "plans"), (name = "missions"), (name = "sites"), (name = "robots"), (name = "ops"))
 )]
 pub struct ApiDoc;
 

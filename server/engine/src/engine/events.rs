@@ -3,9 +3,15 @@
 use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
-use shift_proto::{CorrectionDoc, PlanDocument, PlanEvent, PlanRequest, RegionReady, RobotView, SiteSummary};
+use shift_proto::{
+    CorrectionDoc, MissionRequest, MissionView, PlanDocument, PlanEvent, PlanRequest, RegionReady, RobotView,
+    SiteSummary,
+};
 
+use crate::coverage::CoverageRecord;
 use crate::job::PlanJob;
+use crate::mission::MissionRecord;
+use crate::mission_job::{MissionJob, MissionOutcome};
 use crate::plan::PlanRecord;
 use crate::robots::Pose2;
 use crate::site::{LoadedSite, SiteRecord};
@@ -48,6 +54,12 @@ pub enum Event {
         /// The current documents (corrections applied) of the plans that were being driven.
         #[serde(default)]
         active: Vec<Arc<PlanDocument>>,
+        /// Every mission record.
+        #[serde(default)]
+        missions: Vec<MissionRecord>,
+        /// The measured coverage rasters.
+        #[serde(default)]
+        coverage: Vec<CoverageRecord>,
     },
     /// A map was uploaded (already parsed off the async workers).
     MapUploaded {
@@ -137,7 +149,32 @@ pub enum Event {
         /// Time the check took, microseconds (measured by the daemon).
         compute_us: u64,
     },
-    /// The daemon is stopping: start no more jobs, refuse new plans.
+    /// A client asks for a mission.
+    MissionRequested {
+        /// The request.
+        request: MissionRequest,
+    },
+    /// A client cancels a mission (its plans not yet driven are cancelled; robots keep driving theirs).
+    MissionCancelRequested {
+        /// Mission id.
+        mission_id: String,
+    },
+    /// A client assigns every plan of a planned mission to its robot (the daemon attaches the current
+    /// documents, in the mission's plan order).
+    MissionAssignRequested {
+        /// Mission id.
+        mission_id: String,
+        /// Each plan's current document.
+        docs: Vec<Arc<PlanDocument>>,
+    },
+    /// A mission job ended.
+    MissionFinished {
+        /// Mission id.
+        mission_id: String,
+        /// How.
+        outcome: MissionOutcome,
+    },
+    /// The daemon is stopping: start no more jobs, refuse new plans, commit the measured coverage.
     Shutdown,
 }
 
@@ -158,6 +195,10 @@ impl Event {
             Self::MapChanged { .. } => "map_changed",
             Self::SiteFed { .. } => "site_fed",
             Self::CheckFinished { .. } => "check_finished",
+            Self::MissionRequested { .. } => "mission_requested",
+            Self::MissionCancelRequested { .. } => "mission_cancel_requested",
+            Self::MissionAssignRequested { .. } => "mission_assign_requested",
+            Self::MissionFinished { .. } => "mission_finished",
             Self::Shutdown => "shutdown",
         }
     }
@@ -172,6 +213,9 @@ impl Event {
                 | Self::PlanRequested { .. }
                 | Self::CancelRequested { .. }
                 | Self::AssignPlan { .. }
+                | Self::MissionRequested { .. }
+                | Self::MissionCancelRequested { .. }
+                | Self::MissionAssignRequested { .. }
         )
     }
 }
@@ -206,6 +250,16 @@ pub enum Command {
     },
     /// Run this job on the worker pool.
     StartJob(PlanJob),
+    /// Run this mission job on the worker pool; answer with [`Event::MissionFinished`].
+    StartMission(Box<MissionJob>),
+    /// Persist a mission record (before acknowledging a request about it).
+    StoreMission(MissionRecord),
+    /// The read model's mission view changed (also sent to the mission's event subscribers).
+    MissionChanged(MissionView),
+    /// Persist a measured coverage raster (at intervals while robots sweep, and when the daemon stops).
+    StoreCoverage(Arc<CoverageRecord>),
+    /// The read model's copy of a site's measured coverage raster (at most about once a second).
+    CoverageChanged(Arc<CoverageRecord>),
     /// Raise the cancel flag of a running job.
     CancelJob {
         /// Plan id.

@@ -127,7 +127,7 @@ impl Engine {
             }
             None => pose.yaw,
         };
-        r.pose = Some(pose);
+        let prev = r.pose.replace(pose);
         r.last_seen_ms = now_ms;
         let mut reacquired = false;
         if let Some(a) = r.assignment.as_mut() {
@@ -163,6 +163,7 @@ impl Engine {
                 }
             }
         }
+        self.sweep(robot, prev, pose, now_ms);
         self.watch_health(robot, now_ms, out);
         self.robot_changed(robot, out);
         let Some(r) = self.robots.get(robot) else { return };

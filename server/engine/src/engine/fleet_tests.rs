@@ -138,6 +138,8 @@ fn a_restart_gives_robots_back_their_plans_at_the_committed_version_and_finds_th
                 sites: vec![site],
                 plans: vec![rec],
                 active: vec![lane_doc()],
+                missions: Vec::new(),
+                coverage: Vec::new(),
             },
             100,
         )
@@ -158,6 +160,8 @@ fn a_restart_gives_robots_back_their_plans_at_the_committed_version_and_finds_th
                 sites: vec![site],
                 plans: vec![restarted.plan("p-1").cloned().expect("plan")],
                 active: vec![lane_doc()],
+                missions: Vec::new(),
+                coverage: Vec::new(),
             },
             100,
         )

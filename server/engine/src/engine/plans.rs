@@ -31,26 +31,7 @@ impl Engine {
         }
         let seq = self.next_seq;
         self.next_seq += 1;
-        let rec = PlanRecord {
-            plan_id: format!("p-{seq}"),
-            seq,
-            request,
-            status: PlanStatus::Queued,
-            progress: 0.0,
-            version: 0,
-            regions_ready: 0,
-            metrics: None,
-            error: None,
-            warnings: Vec::new(),
-            robot: None,
-            driven_fraction: 0.0,
-            missed: Vec::new(),
-            watch: None,
-            progress_jumps: Vec::new(),
-            attempts: 0,
-            created_ms: now_ms,
-            updated_ms: now_ms,
-        };
+        let rec = PlanRecord::queued(format!("p-{seq}"), seq, request, now_ms);
         self.queue.push_back(rec.plan_id.clone());
         out.push(Command::StorePlan(rec.clone()));
         out.push(Command::Publish(PlanEvent::Status(rec.to_response())));
@@ -68,6 +49,12 @@ impl Engine {
             .plans
             .values()
             .filter(|r| !matches!(r.status, PlanStatus::Queued | PlanStatus::Planning | PlanStatus::Active))
+            // A part of a mission still under way stays with it.
+            .filter(|r| {
+                (r.mission.as_ref())
+                    .and_then(|m| self.missions.get(m))
+                    .is_none_or(|m| m.record.status.is_settled())
+            })
             .map(|r| (r.seq, r.plan_id.clone()))
             .collect();
         let excess = settled.len().saturating_sub(self.config.retain_plans);
@@ -166,7 +153,10 @@ impl Engine {
             if matches!(rec.status, PlanStatus::Queued | PlanStatus::Planning) {
                 rec.updated_ms = now_ms;
                 rec.progress = 0.0;
-                if self.sites.contains_key(&rec.request.site) {
+                if rec.mission.is_some() {
+                    // Its mission's job plans it again (restore_missions re-queues the mission).
+                    rec.status = PlanStatus::Queued;
+                } else if self.sites.contains_key(&rec.request.site) {
                     rec.status = PlanStatus::Queued;
                     rec.warnings.push("re-queued after a restart".into());
                     self.queue.push_back(rec.plan_id.clone());
@@ -206,6 +196,10 @@ impl Engine {
     pub(super) fn pump(&mut self, now_ms: u64, out: &mut Vec<Command>) {
         while !self.draining && self.running.len() < self.config.workers {
             let Some(id) = self.queue.pop_front() else { break };
+            if self.missions.contains_key(&id) {
+                self.start_mission(&id, now_ms, out);
+                continue;
+            }
             let Some(rec) = self.plans.get_mut(&id) else { continue };
             if rec.status != PlanStatus::Queued {
                 continue;

@@ -318,6 +318,8 @@ fn shutdown_interrupts_back_to_queued_and_restore_requeues() {
                 sites: vec![site],
                 plans: vec![killed, orphan, queued],
                 active: Vec::new(),
+                missions: Vec::new(),
+                coverage: Vec::new(),
             },
             10,
         )

@@ -1,0 +1,138 @@
+//! A mission job: everything a worker needs to divide a site among a fleet and plan every part, and the pure
+//! function that does it ([`shift_planner::pipeline::fleet::plan_fleet`]: division balanced by planned
+//! durations). The daemon runs [`run_mission_job`] on its plan pool and feeds [`MissionOutcome`] back as an
+//! event.
+
+use std::sync::Arc;
+
+use serde::{Deserialize, Serialize};
+use shift_planner::divide::FleetRobot;
+use shift_planner::geom::Point2;
+use shift_planner::map::grid::OccupancyGrid;
+use shift_planner::pipeline::PlanParams;
+use shift_planner::pipeline::fleet::{FleetParams, FleetPlan, plan_fleet};
+use shift_planner::space::RobotShape;
+use shift_planner::speed::SpeedLimits;
+use shift_proto::{MissionRequest, PlanDocument};
+
+use crate::cell_mask::CellMask;
+use crate::job::{apply_overlay, attribute_map, objective};
+use crate::mission::MissionPlanned;
+use crate::plan_doc::to_document;
+use crate::request::ParsedOptions;
+
+/// One mission to divide and plan.
+#[derive(Debug, Clone)]
+pub struct MissionJob {
+    /// Mission id.
+    pub mission_id: String,
+    /// Its plans' ids, in the robots' order.
+    pub plan_ids: Vec<String>,
+    /// The site's grid at the time the job started.
+    pub grid: Arc<OccupancyGrid>,
+    /// The request as accepted.
+    pub request: MissionRequest,
+    /// Its parsed options.
+    pub options: ParsedOptions,
+    /// Live obstacle points (x, y, map frame) marked occupied where the static map is free (filled in by the
+    /// daemon, as for plan jobs; each dock is kept clear).
+    pub overlay: Vec<[f64; 2]>,
+}
+
+/// One robot's planned part.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PlannedPart {
+    /// Its plan document (version 1).
+    pub doc: Arc<PlanDocument>,
+    /// Planner remarks.
+    pub warnings: Vec<String>,
+}
+
+/// How a mission job ended.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum MissionOutcome {
+    /// Divided and planned.
+    Planned {
+        /// One part per robot, in the robots' order.
+        parts: Vec<PlannedPart>,
+        /// The division's figures.
+        planned: MissionPlanned,
+        /// Division remarks.
+        warnings: Vec<String>,
+    },
+    /// Division or a part's plan failed.
+    Failed {
+        /// Why.
+        reason: String,
+    },
+    /// Stopped because the daemon is shutting down; the mission goes back to the queue.
+    Interrupted,
+}
+
+/// Divides and plans (see the module docs).
+pub fn run_mission_job(job: &MissionJob) -> shift_planner::Result<FleetPlan> {
+    let mut grid = (*job.grid).clone();
+    let robots: Vec<FleetRobot> = job
+        .request
+        .robots
+        .iter()
+        .map(|r| FleetRobot {
+            start: Point2::new(r.start[0], r.start[1]),
+            shape: RobotShape {
+                radius_m: r.radius,
+                tool_width_m: r.tool_width,
+            },
+            limits: SpeedLimits::new(r.v_min, r.v_max, r.a_max),
+        })
+        .collect();
+    if !job.overlay.is_empty() {
+        // The live overlay must not block any dock (another robot standing there was seen by its neighbours).
+        let mut keep: Vec<[f64; 2]> = job.overlay.clone();
+        for r in &robots {
+            let clear = 2.0 * r.shape.radius_m + grid.geometry.resolution;
+            keep.retain(|p| (Point2::new(p[0], p[1]) - r.start).norm() >= clear);
+        }
+        apply_overlay(&mut grid, &keep, Point2::origin(), 0.0);
+    }
+    let params = PlanParams {
+        decomposition: job.options.decomposition,
+        order: job.options.order,
+        pattern: job.options.pattern,
+        seed: job.options.seed,
+        objective: objective(job.request.objective.unwrap_or_default()),
+        ..PlanParams::default()
+    };
+    let attribute = match &job.request.attribute {
+        Some(a) => Some(attribute_map(a, grid.geometry)?),
+        None => None,
+    };
+    plan_fleet(&grid, &robots, &params, attribute.as_ref(), &FleetParams::default())
+}
+
+/// The outcome of a computed mission: a plan document per part (`compute_ms` is the whole job's time).
+pub fn planned_outcome(job: &MissionJob, fleet: &FleetPlan, compute_ms: f64) -> MissionOutcome {
+    let with_attribute = job.request.attribute.is_some();
+    let parts = (fleet.division.parts.iter().zip(&fleet.plans).zip(&job.plan_ids))
+        .map(|((part, (output, profile)), plan_id)| PlannedPart {
+            doc: Arc::new(to_document(
+                plan_id,
+                (&part.space, output),
+                profile,
+                with_attribute,
+                compute_ms,
+            )),
+            warnings: output.warnings.clone(),
+        })
+        .collect();
+    MissionOutcome::Planned {
+        parts,
+        planned: MissionPlanned {
+            coverable: CellMask::encode(&fleet.division.coverable),
+            areas_m2: fleet.division.parts.iter().map(|p| p.owned_area_m2).collect(),
+            planned_pct: fleet.metrics.union_coverage_pct,
+            seam_pct: fleet.metrics.seam_overlap_pct,
+        },
+        warnings: fleet.division.warnings.clone(),
+    }
+}

@@ -1,0 +1,294 @@
+//! Missions from the outside (issue 20): a backend uploads its own site (the shared `warehouse` scene) and asks
+//! for one mission for three robots; the robots are separate Zenoh participants that fetch their plans as
+//! robots do and drive them by odometry; the daemon measures what their tools swept. Bad requests are refused
+//! naming the field, with nothing stored; a restart restores the mission and the measured raster.
+
+use std::path::Path;
+use std::time::Duration;
+
+use anyhow::{Context, Result, bail};
+use serde_json::{Value, json};
+use shift_tests::TestServer;
+use shift_tests::fleet::{LONG, ScriptedRobot, fleet_config, poll, wait_robot_alive};
+
+/// The robots and their docks: spread over the warehouse's free floor (a corner, the far corner, the middle
+/// aisle), as a backend names its docks.
+const ROBOTS: [(&str, [f64; 2]); 3] = [("wh1", [1.0, 1.0]), ("wh2", [38.0, 23.0]), ("wh3", [20.0, 12.0])];
+
+async fn upload_warehouse(server: &TestServer) -> Result<()> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenarios/warehouse");
+    let yaml = std::fs::read_to_string(dir.join("map.yaml"))?;
+    let image = std::fs::read(dir.join("map.pgm"))?;
+    let form = reqwest::multipart::Form::new()
+        .part("yaml", reqwest::multipart::Part::text(yaml))
+        .part("image", reqwest::multipart::Part::bytes(image).file_name("map.pgm"));
+    let r = server
+        .http
+        .post(server.url("/v1/sites/warehouse/map"))
+        .multipart(form)
+        .send()
+        .await?;
+    if !r.status().is_success() {
+        bail!("warehouse upload: {} {}", r.status(), r.text().await?);
+    }
+    Ok(())
+}
+
+fn robot(id: &str, start: [f64; 2]) -> Value {
+    json!({"id": id, "start": start, "radius": 0.3, "tool_width": 0.6})
+}
+
+fn mission_body(robots: &[(&str, [f64; 2])]) -> Value {
+    json!({"site": "warehouse", "robots": robots.iter().map(|(id, s)| robot(id, *s)).collect::<Vec<_>>()})
+}
+
+async fn refused(server: &TestServer, body: &Value, code: u16, says: &str) -> Result<()> {
+    let (got, answer) = server.post("/v1/missions", body).await?;
+    let message = answer["error"]["message"].as_str().unwrap_or_default();
+    if got != code || !message.contains(says) {
+        bail!("expected {code} saying {says:?}, got {got} {answer}");
+    }
+    Ok(())
+}
+
+/// Drives `doc`'s path by odometry every 0.4 m (10 poses per simulated second at 4 m/s, sent as fast as the
+/// loopback takes them, a pause every few poses so the daemon's inbox is not flooded).
+async fn drive(robot: &ScriptedRobot, name: &str, doc: &shift_proto::PlanDocument) -> Result<()> {
+    let w = &doc.waypoints;
+    let mut sent = 0usize;
+    for pair in w.windows(2) {
+        let (a, b) = (pair[0], pair[1]);
+        let len = (b.x - a.x).hypot(b.y - a.y);
+        let yaw = (b.y - a.y).atan2(b.x - a.x);
+        let n = (len / 0.4).ceil().max(1.0) as usize;
+        for k in 0..n {
+            let f = k as f64 / n as f64;
+            robot
+                .odom(name, a.x + (b.x - a.x) * f, a.y + (b.y - a.y) * f, yaw)
+                .await?;
+            sent += 1;
+            if sent.is_multiple_of(16) {
+                tokio::time::sleep(Duration::from_millis(4)).await;
+            }
+        }
+    }
+    if let Some(last) = w.last() {
+        for _ in 0..3 {
+            robot.odom(name, last.x, last.y, 0.0).await?;
+            tokio::time::sleep(Duration::from_millis(50)).await;
+        }
+    }
+    Ok(())
+}
+
+fn swept_cells(grid: &Value) -> usize {
+    grid["cells"]
+        .as_array()
+        .map_or(0, |c| c.iter().filter(|v| v.as_i64() == Some(100)).count())
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_mission_on_a_backends_site_is_divided_planned_driven_measured_and_restored() -> Result<()> {
+    let dir = tempfile::tempdir()?;
+    let (config, endpoint) = fleet_config(dir.path())?;
+    let server = TestServer::start(config.clone()).await?;
+    upload_warehouse(&server).await?;
+
+    // Refused, naming the field; nothing stored.
+    let mut dup = mission_body(&ROBOTS);
+    dup["robots"][2]["id"] = json!("wh1");
+    refused(&server, &dup, 400, "robots[2].id \"wh1\" is named twice").await?;
+    refused(&server, &mission_body(&[]), 400, "robots must name at least one robot").await?;
+    refused(&server, &mission_body(&[("wh1", [0.05, 0.05])]), 400, "robots[0].start").await?;
+    refused(
+        &server,
+        &mission_body(&[("wh1", [1.0, 1.0]), ("wh2", [99.0, 1.0])]),
+        400,
+        "robots[1] (wh2)",
+    )
+    .await?;
+    let mut nan = mission_body(&ROBOTS);
+    nan["robots"][1]["tool_width"] = json!(-1.0);
+    refused(&server, &nan, 400, "robots[1] (wh2): tool_width must be positive").await?;
+    let mut elsewhere = mission_body(&ROBOTS);
+    elsewhere["site"] = json!("nowhere");
+    refused(&server, &elsewhere, 404, "unknown site").await?;
+    let (_, listed) = server.get("/v1/plans?site=warehouse").await?;
+    assert_eq!(listed["items"].as_array().map(Vec::len), Some(0), "{listed}");
+    assert_eq!(server.get("/v1/missions/m-404").await?.0, 404);
+
+    // Accepted, divided and planned.
+    let (code, accepted) = server.post("/v1/missions", &mission_body(&ROBOTS)).await?;
+    assert_eq!(code, 202, "{accepted}");
+    assert_eq!(accepted["status"], "queued");
+    let id = accepted["mission_id"].as_str().context("mission_id")?.to_owned();
+    let path = format!("/v1/missions/{id}");
+    let ready = poll(
+        async || {
+            let (_, m) = server.get(&path).await?;
+            match m["status"].as_str() {
+                Some("ready") => Ok(Some(m)),
+                Some("failed") => bail!("mission failed: {m}"),
+                _ => Ok(None),
+            }
+        },
+        "the mission to be planned",
+    )
+    .await?;
+    let plans = ready["plans"].as_array().context("plans")?.clone();
+    assert_eq!(plans.len(), 3);
+    assert!(
+        ready["coverage"]["planned_pct"].as_f64().is_some_and(|p| p >= 99.0),
+        "{ready}"
+    );
+    assert!(
+        ready["coverage"]["seam_pct"].as_f64().is_some_and(|p| p <= 5.0),
+        "{ready}"
+    );
+    assert!(ready["eta_s"].as_f64().is_some_and(|t| t > 0.0), "{ready}");
+    let mut area = 0.0;
+    for (p, (name, _)) in plans.iter().zip(ROBOTS) {
+        assert_eq!(p["robot"], name);
+        area += p["area_m2"].as_f64().context("area")?;
+        let plan_id = p["plan_id"].as_str().context("plan_id")?;
+        // Each part is an ordinary plan, which names its mission.
+        let (_, plan) = server.get(&format!("/v1/plans/{plan_id}")).await?;
+        assert_eq!(plan["status"], "ready");
+        assert_eq!(plan["mission"], id.as_str());
+        assert_eq!(p["planned_duration_s"], plan["metrics"]["duration_s"]);
+    }
+    // The parts hold the warehouse's floor between them (40 m × 25 m less racks and walls).
+    assert!((500.0..1000.0).contains(&area), "{area} m²");
+
+    // The robots join as robots do, the backend assigns the mission, each robot fetches its plan.
+    let mut robots = Vec::new();
+    for (name, _) in ROBOTS {
+        robots.push(ScriptedRobot::join(&endpoint, name).await?);
+        wait_robot_alive(&server, name).await?;
+    }
+    let (code, active) = server.post(&format!("{path}/assign"), &json!({})).await?;
+    assert_eq!(code, 200, "{active}");
+    assert_eq!(active["status"], "active");
+    let mut docs = Vec::new();
+    for ((name, _), r) in ROBOTS.iter().zip(&robots) {
+        let doc = r.query_plan(name, Duration::from_secs(10)).await?;
+        let expected = plans
+            .iter()
+            .find(|p| p["robot"] == *name)
+            .and_then(|p| p["plan_id"].as_str());
+        assert_eq!(Some(doc.plan_id.as_str()), expected, "{name} got its own part");
+        docs.push(doc);
+    }
+    // They drive at once.
+    let drives = ROBOTS
+        .iter()
+        .zip(&robots)
+        .zip(&docs)
+        .map(|(((name, _), r), doc)| drive(r, name, doc));
+    for result in futures_util::future::join_all(drives).await {
+        result?;
+    }
+    let done = poll(
+        async || {
+            let (_, m) = server.get(&path).await?;
+            Ok((m["status"] == "done").then_some(m))
+        },
+        "the mission to be done",
+    )
+    .await?;
+    let measured = done["coverage"]["measured_pct"].as_f64().context("measured")?;
+    eprintln!(
+        "mission {id}: planned {} %, seams {} %, measured {measured:.2} %, durations {:?} s",
+        done["coverage"]["planned_pct"],
+        done["coverage"]["seam_pct"],
+        plans
+            .iter()
+            .map(|p| p["planned_duration_s"].as_f64().unwrap_or(0.0).round())
+            .collect::<Vec<_>>()
+    );
+    assert!(
+        measured >= 98.0,
+        "the robots' tools swept {measured} % of the mission: {done}"
+    );
+    assert_eq!(done["progress"].as_f64(), Some(1.0));
+    assert_eq!(done["eta_s"].as_f64(), Some(0.0));
+
+    // The site's raster: JSON like an OccupancyGrid, and a PNG.
+    let (code, grid) = server.get("/v1/sites/warehouse/coverage").await?;
+    assert_eq!(code, 200);
+    assert_eq!(
+        (grid["width"].as_u64(), grid["height"].as_u64()),
+        (Some(400), Some(250))
+    );
+    let swept = swept_cells(&grid);
+    assert!(swept > 50_000, "{swept} cells of 0.01 m² swept");
+    let png = server
+        .http
+        .get(server.url("/v1/sites/warehouse/coverage?format=png"))
+        .send()
+        .await?;
+    assert_eq!(
+        png.headers().get("content-type").and_then(|v| v.to_str().ok()),
+        Some("image/png")
+    );
+    let png = png.bytes().await?;
+    assert!(png.starts_with(b"\x89PNG") && png.len() > 1_000, "{} bytes", png.len());
+    assert_eq!(server.get("/v1/sites/warehouse/coverage?format=gif").await?.0, 400);
+
+    // A restart restores the mission and what was swept.
+    drop(robots);
+    server.stop().await?;
+    let server = TestServer::start(config).await?;
+    let (_, again) = server.get(&path).await?;
+    assert_eq!(again["status"], "done", "{again}");
+    assert_eq!(again["coverage"]["measured_pct"].as_f64(), Some(measured));
+    let (_, grid) = server.get("/v1/sites/warehouse/coverage").await?;
+    assert_eq!(swept_cells(&grid), swept, "the raster survived the restart");
+    assert_eq!(server.delete(&path).await?.0, 409, "a done mission cannot be cancelled");
+    server.stop().await?;
+    Ok(())
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_mission_is_followed_over_sse_and_cancelled_with_its_plans() -> Result<()> {
+    let dir = tempfile::tempdir()?;
+    let (config, _) = fleet_config(dir.path())?;
+    let server = TestServer::start(config).await?;
+    upload_warehouse(&server).await?;
+    let (_, accepted) = server.post("/v1/missions", &mission_body(&ROBOTS[..2])).await?;
+    let id = accepted["mission_id"].as_str().context("mission_id")?.to_owned();
+    let mut events = server
+        .http
+        .get(server.url(&format!("/v1/missions/{id}/events")))
+        .send()
+        .await?;
+    assert_eq!(events.status().as_u16(), 200);
+    // Read `mission` events until the mission is ready.
+    let mut text = String::new();
+    let deadline = tokio::time::Instant::now() + LONG;
+    while !text.contains("\"status\":\"ready\"") {
+        let chunk = tokio::time::timeout_at(deadline, events.chunk())
+            .await
+            .context("no ready event in time")??
+            .context("stream ended before ready")?;
+        text.push_str(&String::from_utf8_lossy(&chunk));
+    }
+    assert!(text.starts_with("event: mission\n"), "{text}");
+    let statuses: Vec<&str> = ["queued", "planning", "ready"]
+        .into_iter()
+        .filter(|s| text.contains(&format!("\"status\":\"{s}\"")))
+        .collect();
+    assert!(statuses.ends_with(&["ready"]), "{statuses:?}: {text}");
+    let (code, cancelled) = server.delete(&format!("/v1/missions/{id}")).await?;
+    assert_eq!(code, 200, "{cancelled}");
+    assert_eq!(cancelled["status"], "cancelled");
+    for p in cancelled["plans"].as_array().context("plans")? {
+        assert_eq!(p["status"], "cancelled", "{p}");
+    }
+    assert_eq!(
+        server.post(&format!("/v1/missions/{id}/assign"), &json!({})).await?.0,
+        409
+    );
+    server.stop().await?;
+    Ok(())
+}
