@@ -30,7 +30,7 @@
 
 mod disc;
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 
 use crate::error::{PlannerError, Result};
 use crate::space::CoverageSpace;

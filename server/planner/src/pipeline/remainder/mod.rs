@@ -18,6 +18,9 @@ use crate::speed::attribute::AttributeMap;
 use crate::speed::{SpeedParams, SpeedProfile};
 
 use super::fleet::{FleetParams, FleetPlan, plan_fleet_with};
+
+#[cfg(test)]
+mod tests;
 use super::{PlanMonitor, PlanOutput, PlanParams, plan_shaped};
 
 /// A robot's replan.
@@ -156,4 +159,27 @@ pub fn plan_fleet_remainder(
         fleet: plan,
         remainders,
     })
+}
+
+/// Splits `path` where `driven_m` metres of it have been driven: the driven part and the rest, both holding
+/// the split point (for benches and tests that stamp what a robot drove; the daemon measures it instead).
+pub fn split_at_length(path: &[Point2], driven_m: f64) -> (Vec<Point2>, Vec<Point2>) {
+    let mut left = driven_m.max(0.0);
+    for (k, w) in path.windows(2).enumerate() {
+        let d = (w[1] - w[0]).norm();
+        if left <= d {
+            let p = if d > 0.0 {
+                w[0] + (w[1] - w[0]) * (left / d)
+            } else {
+                w[0]
+            };
+            let mut driven = path[..=k].to_vec();
+            driven.push(p);
+            let mut rest = vec![p];
+            rest.extend_from_slice(&path[k + 1..]);
+            return (driven, rest);
+        }
+        left -= d;
+    }
+    (path.to_vec(), path.last().map(|&p| vec![p]).unwrap_or_default())
 }
