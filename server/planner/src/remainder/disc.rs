@@ -36,6 +36,11 @@ impl Disc {
         }
         Self { spans, cells }
     }
+
+    /// Rows the disc reaches above and below its centre.
+    pub(crate) fn rows(&self) -> usize {
+        self.spans.len() / 2
+    }
 }
 
 /// Per-row prefix sums of a mask: how many masked cells a row holds left of every column.
@@ -120,30 +125,67 @@ pub(crate) fn map_cells<T: Send + Copy + Default>(g: &GridGeometry, f: impl Fn(u
 }
 
 /// 8-connected pieces of `mask`: a piece id per cell (`u32::MAX` off the mask) and every piece's size, ids in
-/// order of each piece's lowest cell.
+/// order of each piece's lowest cell. Runs of masked cells row by row, joined to the runs they touch in the
+/// row before (union-find): linear in the cells, with far fewer steps than a flood fill.
 pub(crate) fn pieces(g: &GridGeometry, mask: &[bool]) -> (Vec<u32>, Vec<usize>) {
-    let mut id = vec![u32::MAX; g.len()];
-    let mut sizes = Vec::new();
-    let mut stack = Vec::new();
-    for s in 0..g.len() {
-        if !mask[s] || id[s] != u32::MAX {
-            continue;
+    let (w, h) = (g.width, g.height);
+    // Runs (row, first column, last column) and their parents.
+    let mut runs: Vec<(usize, usize, usize)> = Vec::new();
+    let mut parent: Vec<u32> = Vec::new();
+    fn root(parent: &mut [u32], mut x: u32) -> u32 {
+        while parent[x as usize] != x {
+            let up = parent[parent[x as usize] as usize];
+            parent[x as usize] = up;
+            x = up;
         }
-        let k = sizes.len() as u32;
-        id[s] = k;
-        stack.push(s);
-        let mut size = 0;
-        while let Some(i) = stack.pop() {
-            size += 1;
-            for n in g.neighbors8(g.cell(i)) {
-                let j = g.index(n);
-                if mask[j] && id[j] == u32::MAX {
-                    id[j] = k;
-                    stack.push(j);
+        x
+    }
+    let mut prev = 0..0;
+    for y in 0..h {
+        let start = runs.len();
+        let row = &mask[y * w..(y + 1) * w];
+        let mut j = prev.start;
+        let mut x = 0;
+        while x < w {
+            if !row[x] {
+                x += 1;
+                continue;
+            }
+            let x0 = x;
+            while x < w && row[x] {
+                x += 1;
+            }
+            let x1 = x - 1;
+            let k = runs.len() as u32;
+            runs.push((y, x0, x1));
+            parent.push(k);
+            // Runs of the row before touching columns x0 - 1 ..= x1 + 1 (8-connected).
+            while j < prev.end && runs[j].2 + 1 < x0 {
+                j += 1;
+            }
+            let mut t = j;
+            while t < prev.end && runs[t].1 <= x1 + 1 {
+                let (a, b) = (root(&mut parent, k), root(&mut parent, t as u32));
+                if a != b {
+                    parent[a.max(b) as usize] = a.min(b);
                 }
+                t += 1;
             }
         }
-        sizes.push(size);
+        prev = start..runs.len();
+    }
+    let mut dense = vec![u32::MAX; runs.len()];
+    let mut sizes = Vec::new();
+    let mut id = vec![u32::MAX; g.len()];
+    for (k, &(y, x0, x1)) in runs.iter().enumerate() {
+        let r = root(&mut parent, k as u32) as usize;
+        if dense[r] == u32::MAX {
+            dense[r] = sizes.len() as u32;
+            sizes.push(0);
+        }
+        let d = dense[r];
+        sizes[d as usize] += x1 - x0 + 1;
+        id[y * w + x0..=y * w + x1].fill(d);
     }
     (id, sizes)
 }
@@ -170,5 +212,38 @@ mod tests {
             }
         }
         assert_eq!(Disc::new(0.3, 0.1).cells, 29);
+    }
+
+    /// Pieces agree with an 8-connected flood fill (oracle): same partition, ids in order of lowest cell.
+    #[test]
+    fn pieces_match_a_flood_fill() {
+        let g = GridGeometry::new(31, 19, 0.1, Point2::origin()).expect("valid");
+        for seed in 1..40_u64 {
+            let mut s = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+            let mask: Vec<bool> = (0..g.len())
+                .map(|_| {
+                    s ^= s << 13;
+                    s ^= s >> 7;
+                    s ^= s << 17;
+                    s % 100 < 30 + seed
+                })
+                .collect();
+            let (id, sizes) = pieces(&g, &mask);
+            let mut next = 0;
+            for i in 0..g.len() {
+                assert_eq!(id[i] == u32::MAX, !mask[i]);
+                if !mask[i] || id[i] < next {
+                    continue;
+                }
+                assert_eq!(id[i], next, "ids in order of lowest cell");
+                let fill = crate::space::flood_fill8(&g, &mask, g.cell(i));
+                let members: Vec<usize> = (0..g.len()).filter(|&j| fill[j]).collect();
+                assert!(members.iter().all(|&j| id[j] == next));
+                assert_eq!(sizes[next as usize], members.len());
+                assert_eq!(id.iter().filter(|&&d| d == next).count(), members.len());
+                next += 1;
+            }
+            assert_eq!(next as usize, sizes.len());
+        }
     }
 }

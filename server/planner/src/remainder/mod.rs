@@ -156,8 +156,14 @@ pub fn remainder(space: &CoverageSpace, covered: &[bool], params: &RemainderPara
     let seeds = {
         let new = RowSums::new(&g, |i| uncovered[i]);
         let ground = RowSums::new(&g, |i| space.coverable[i]);
+        // Rows with no uncovered cell within a disc's reach hold no seed (a covered band is skipped whole).
+        let reach = tool.rows();
+        let mut near = vec![false; g.height];
+        for y in (0..g.height).filter(|&y| uncovered[y * g.width..(y + 1) * g.width].contains(&true)) {
+            near[y.saturating_sub(reach)..=(y + reach).min(g.height - 1)].fill(true);
+        }
         let seed = map_cells(&g, |i| {
-            if !space.reachable[i] {
+            if !(space.reachable[i] && near[i / g.width]) {
                 return false;
             }
             let n = new.count(&tool, i);
