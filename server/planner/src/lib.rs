@@ -22,6 +22,7 @@ pub mod metrics;
 pub mod order;
 pub mod pattern;
 pub mod pipeline;
+pub mod remainder;
 pub mod smooth;
 pub mod space;
 pub mod speed;

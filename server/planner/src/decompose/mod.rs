@@ -148,20 +148,41 @@ impl Decomposer for Single {
     }
 }
 
-/// Runs a strategy and normalises its labels.
+/// Runs a strategy and normalises its labels. A space with a work mask ([`CoverageSpace::work`]) is
+/// decomposed as if its reachable set were the masked cells (which may lie in several pieces: each becomes a
+/// region of its own, or more).
 pub fn decompose(space: &CoverageSpace, method: DecompositionMethod, params: &DecomposeParams) -> Regions {
-    let raw = method.decomposer().label(space, params);
-    normalize(space, &raw, params.min_cells(space))
+    match &space.work {
+        None => {
+            let raw = method.decomposer().label(space, params);
+            normalize(space, &raw, params.min_cells(space))
+        }
+        Some(work) => {
+            let view = CoverageSpace {
+                reachable: space.reachable.iter().zip(work).map(|(&r, &w)| r && w).collect(),
+                work: None,
+                ..space.clone()
+            };
+            let raw = method.decomposer().label(&view, params);
+            normalize_pieces(&view, &raw, params.min_cells(space), false)
+        }
+    }
 }
 
 /// Enforces the region invariants (see the module docs) on raw labels. Reachable cells with no raw label
 /// become their own pieces before merging.
 pub fn normalize(space: &CoverageSpace, raw: &[u32], min_cells: usize) -> Regions {
+    normalize_pieces(space, raw, min_cells, true)
+}
+
+/// [`normalize`]; `connected`: the reachable set is known to be one 8-connected piece.
+fn normalize_pieces(space: &CoverageSpace, raw: &[u32], min_cells: usize, connected: bool) -> Regions {
     let g = *space.geometry();
     let n = g.len();
     // The reachable set is one 8-connected component: under a single raw label it is one region as it is.
     let mut reachable = (0..n).filter(|&i| space.reachable[i]);
-    if let Some(first) = reachable.next()
+    if connected
+        && let Some(first) = reachable.next()
         && reachable.all(|i| raw[i] == raw[first])
     {
         return Regions {

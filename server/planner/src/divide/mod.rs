@@ -197,6 +197,27 @@ pub fn divide(
     calibration: Option<&[f64]>,
     params: &DivideParams,
 ) -> Result<Division> {
+    divide_within(grid, robots, attribute, calibration, params, None)
+}
+
+/// As [`divide`], with only the coverable cells flagged in `only` (one flag per grid cell) to cover, as when
+/// a remainder is replanned ([`crate::pipeline::remainder`]): they alone weigh in the balance and are left
+/// coverable in the parts, while every reachable cell is still shared out (robots drive across the rest of
+/// their part). `None` is [`divide`].
+pub fn divide_within(
+    grid: &OccupancyGrid,
+    robots: &[FleetRobot],
+    attribute: Option<&AttributeMap>,
+    calibration: Option<&[f64]>,
+    params: &DivideParams,
+    only: Option<&[bool]>,
+) -> Result<Division> {
+    if only.is_some_and(|o| o.len() != grid.cells.len()) {
+        return Err(PlannerError::InvalidParam {
+            name: "only",
+            reason: format!("needs one flag per grid cell ({})", grid.cells.len()),
+        });
+    }
     if robots.is_empty() {
         return Err(PlannerError::InvalidParam {
             name: "robots",
@@ -235,7 +256,7 @@ pub fn divide(
     }
     let cell_area = g.resolution * g.resolution;
     let coverable: Vec<bool> = (0..g.len())
-        .map(|i| fields.iter().any(|f| f.space.coverable[i]))
+        .map(|i| only.is_none_or(|o| o[i]) && fields.iter().any(|f| f.space.coverable[i]))
         .collect();
     let work = work::Work::new(robots, calibration, cell_area, attribute, &coverable);
     let table = balance::Table::new(&fields, &work);
@@ -253,13 +274,16 @@ pub fn divide(
     let mut parts = Vec::with_capacity(robots.len());
     for (k, f) in fields.iter().enumerate() {
         let inset = f.space.robot.tool_width_m / 2.0;
-        let (keep_reachable, keep_coverable) =
+        let (keep_reachable, mut keep_coverable) =
             ownership::part_masks(&f.space, f.start_cell, &owner, k as u32, params.seam_cells, inset);
+        if let Some(o) = only {
+            keep_coverable.iter_mut().zip(o).for_each(|(c, &o)| *c &= o);
+        }
         let space = f
             .space
             .confined_from(f.start_cell, f.start, &keep_reachable, &keep_coverable);
         let owned: Vec<usize> = (0..g.len())
-            .filter(|&i| owner[i] == k as u32 && f.space.coverable[i])
+            .filter(|&i| owner[i] == k as u32 && f.space.coverable[i] && coverable[i])
             .collect();
         parts.push(Part {
             space,

@@ -9,11 +9,12 @@
 //! the longest planned duration is within [`FleetParams::goal_ratio`] of the shortest or the rounds run out;
 //! the best round is kept.
 
-use crate::divide::{DivideParams, Division, FleetRobot, divide};
+use crate::divide::{DivideParams, Division, FleetRobot, divide_within};
 use crate::error::Result;
 use crate::map::OccupancyGrid;
 use crate::metrics::CoverageRaster;
 use crate::pipeline::{NoMonitor, PlanOutput, PlanParams, plan_shaped};
+use crate::space::CoverageSpace;
 use crate::speed::attribute::AttributeMap;
 use crate::speed::{SpeedParams, SpeedProfile};
 
@@ -80,8 +81,39 @@ pub fn plan_fleet(
     attribute: Option<&AttributeMap>,
     fleet: &FleetParams,
 ) -> Result<FleetPlan> {
-    let plan_round = |calibration: &[f64], round: usize| -> Result<FleetPlan> {
-        let division = divide(grid, robots, attribute, Some(calibration), &fleet.divide)?;
+    plan_fleet_with(grid, robots, params, attribute, fleet, None, &mut |_, _, _| Ok(None))
+}
+
+/// Replaces a part's space before it is planned: called with the round (from 1), the robot's index and its
+/// part's space; `None` keeps the space.
+pub(super) type RefinePart<'a> = dyn FnMut(usize, usize, &CoverageSpace) -> Result<Option<CoverageSpace>> + 'a;
+
+/// [`plan_fleet`] with the division made on the cells of `only` ([`crate::divide::divide_within`]) and each
+/// part's space passed through `refine` before it is planned; `division.coverable` then holds the cells
+/// coverable in some refined part.
+pub(super) fn plan_fleet_with(
+    grid: &OccupancyGrid,
+    robots: &[FleetRobot],
+    params: &PlanParams,
+    attribute: Option<&AttributeMap>,
+    fleet: &FleetParams,
+    only: Option<&[bool]>,
+    refine: &mut RefinePart<'_>,
+) -> Result<FleetPlan> {
+    let mut plan_round = |calibration: &[f64], round: usize| -> Result<FleetPlan> {
+        let mut division = divide_within(grid, robots, attribute, Some(calibration), &fleet.divide, only)?;
+        let mut refined = false;
+        for (k, part) in division.parts.iter_mut().enumerate() {
+            if let Some(space) = refine(round, k, &part.space)? {
+                part.space = space;
+                refined = true;
+            }
+        }
+        if refined {
+            for (i, c) in division.coverable.iter_mut().enumerate() {
+                *c = division.parts.iter().any(|p| p.space.coverable[i]);
+            }
+        }
         let mut plans = Vec::with_capacity(robots.len());
         for (part, robot) in division.parts.iter().zip(robots) {
             let p = PlanParams {

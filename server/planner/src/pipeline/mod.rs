@@ -7,6 +7,7 @@ pub mod objective;
 pub use objective::Objective;
 mod portfolio;
 pub mod prepare;
+pub mod remainder;
 pub mod route;
 pub mod shaped;
 pub use shaped::plan_shaped;

@@ -55,6 +55,12 @@ pub struct CoverageSpace {
     pub reachable: Vec<bool>,
     /// Coverable cells.
     pub coverable: Vec<bool>,
+    /// Where patterns may lie, when not on every reachable cell: `Some(mask)` (within the reachable set)
+    /// limits the decomposition's regions, and with them lanes, rings and passes, to the masked cells, while
+    /// transits still use every reachable cell (a remainder's replan drives across covered ground to the
+    /// places left to cover, [`crate::remainder`]). `None` for every space [`CoverageSpace::new`] and
+    /// [`CoverageSpace::confined`] make.
+    pub work: Option<Vec<bool>>,
     /// The start cell (after snapping).
     pub start_cell: Cell,
     /// The start point in the map frame (the requested one, or the snapped cell's centre), metres.
@@ -148,6 +154,7 @@ impl CoverageSpace {
             traversable,
             reachable,
             coverable,
+            work: None,
             start_cell,
             start: start_pt,
             warnings,
@@ -211,6 +218,7 @@ impl CoverageSpace {
             traversable: self.traversable.clone(),
             reachable,
             coverable,
+            work: None,
             start_cell,
             start,
             // The remarks are about this space's own start.
@@ -219,6 +227,37 @@ impl CoverageSpace {
             } else {
                 Vec::new()
             },
+        }
+    }
+
+    /// This space with only the cells of `keep_coverable` left to cover and patterns confined to `work`
+    /// ([`CoverageSpace::work`], masks one flag per cell), the robot starting at `start` in `start_cell`
+    /// (on this space's reachable set, which stays whole: the robot drives across what is already covered).
+    /// A start off the reachable set leaves nothing reachable and nothing to cover.
+    pub fn with_work(&self, start_cell: Cell, start: Point2, keep_coverable: &[bool], work: &[bool]) -> Self {
+        let g = *self.geometry();
+        let on = g.index(start_cell) < g.len() && self.reachable[g.index(start_cell)];
+        let mask = |m: &[bool], base: &[bool]| -> Vec<bool> {
+            (0..g.len())
+                .map(|i| on && base[i] && m.get(i).copied().unwrap_or(false))
+                .collect()
+        };
+        Self {
+            grid: self.grid.clone(),
+            robot: self.robot,
+            clearance: self.clearance.clone(),
+            traversable: self.traversable.clone(),
+            // The reachable set is one 8-connected piece, so any of its cells reaches all of it.
+            reachable: if on {
+                self.reachable.clone()
+            } else {
+                vec![false; g.len()]
+            },
+            coverable: mask(keep_coverable, &self.coverable),
+            work: Some(mask(work, &self.reachable)),
+            start_cell,
+            start,
+            warnings: Vec::new(),
         }
     }
 

@@ -1,0 +1,134 @@
+//! Resume and replan of the remainder (issue 20's bench):
+//! `cargo run --release -p shift-planner --example remainder_bench -- [SCENE_DIR | SIDE_M ...]` (default: the
+//! malaga-telecom-hall scene and generated cluttered sites of 200 m and 224 m, 4 M and 5 M cells). Each
+//! site is planned whole, the first half of the path (by length) is driven (stamped covered with the tool),
+//! and the remainder is cleaned and replanned from where the robot stopped. Prints the cells, the pieces of
+//! the uncovered area before and after cleaning, the area dropped and the area left, the time to clean and
+//! to replan, the replanned length over the unfinished half's, and the replan's coverage of what was kept.
+//! `STAGES=1` adds the replan's progress timeline (progress, ms).
+
+use std::path::Path;
+use std::time::Instant;
+
+use shift_planner::geom::{Point2, polyline_length};
+use shift_planner::map::load_ros_map;
+use shift_planner::metrics::CoverageRaster;
+use shift_planner::pipeline::remainder::{remainder_space, split_at_length};
+use shift_planner::pipeline::{NoMonitor, PlanMonitor, PlanParams, plan, plan_shaped};
+use shift_planner::remainder::{RemainderParams, remainder};
+use shift_planner::space::{CoverageSpace, RobotShape};
+use shift_planner::speed::{SpeedLimits, SpeedParams};
+use shift_planner::testing::cluttered_site;
+
+#[derive(serde::Deserialize)]
+struct Scene {
+    map: String,
+    start: [f64; 2],
+    robot_radius: f64,
+    tool_width: f64,
+}
+
+fn scene(dir: &Path) -> Result<CoverageSpace, String> {
+    let text = std::fs::read_to_string(dir.join("scene.json")).map_err(|e| e.to_string())?;
+    let scene: Scene = serde_json::from_str(&text).map_err(|e| e.to_string())?;
+    let yaml = std::fs::read_to_string(dir.join(&scene.map)).map_err(|e| e.to_string())?;
+    let map = load_ros_map(&yaml, |img| std::fs::read(dir.join(img)).map_err(|e| e.to_string()))
+        .map_err(|e| e.to_string())?;
+    let robot = RobotShape {
+        radius_m: scene.robot_radius,
+        tool_width_m: scene.tool_width,
+    };
+    CoverageSpace::new(map.grid, robot, Point2::new(scene.start[0], scene.start[1])).map_err(|e| e.to_string())
+}
+
+fn generated(side: f64) -> Result<CoverageSpace, String> {
+    let grid = cluttered_site(side, side, 0.1, (side * side / 100.0) as usize, 7).map_err(|e| e.to_string())?;
+    let robot = RobotShape {
+        radius_m: 0.3,
+        tool_width_m: 0.6,
+    };
+    CoverageSpace::new(grid, robot, Point2::new(1.0, 1.0)).map_err(|e| e.to_string())
+}
+
+/// Records elapsed milliseconds at every progress report.
+struct Stages(Instant, Vec<(f64, u64)>);
+
+impl PlanMonitor for Stages {
+    fn progress(&mut self, fraction: f64) {
+        self.1
+            .push(((fraction * 100.0).round() / 100.0, self.0.elapsed().as_millis() as u64));
+    }
+}
+
+fn bench(name: &str, space: &CoverageSpace) -> Result<(), String> {
+    let params = PlanParams::default();
+    let t = Instant::now();
+    let whole = plan(space, &params, &mut NoMonitor).map_err(|e| e.to_string())?;
+    let plan_s = t.elapsed().as_secs_f64();
+    let path = whole.points();
+    let (driven, rest) = split_at_length(&path, polyline_length(&path) / 2.0);
+    let mut raster = CoverageRaster::new(*space.geometry(), space.robot.tool_width_m / 2.0);
+    raster.stamp_polyline(&driven);
+    let from = rest.first().copied().unwrap_or(space.start);
+
+    let t = Instant::now();
+    let rem = remainder(space, raster.covered(), &RemainderParams::default()).map_err(|e| e.to_string())?;
+    let remainder_s = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let replan_space = remainder_space(space, &rem, from).map_err(|e| e.to_string())?;
+    let speed = SpeedParams::new(SpeedLimits::default(), space.robot.tool_width_m);
+    let mut stages = Stages(Instant::now(), Vec::new());
+    let (out, _) = plan_shaped(&replan_space, &params, None, &speed, &mut stages).map_err(|e| e.to_string())?;
+    let replan_s = t.elapsed().as_secs_f64();
+    if std::env::var("STAGES").is_ok() {
+        eprintln!("{name} replan stages (progress, ms): {:?}", stages.1);
+    }
+    let unfinished = polyline_length(&rest);
+    let m = out.metrics;
+    println!(
+        "{{\"scene\": \"{name}\", \"cells\": {}, \"whole_plan_s\": {plan_s:.2}, \"whole_length_m\": {:.0}, \
+         \"uncovered_pieces_before\": {}, \"pieces_after\": {}, \"work_pieces\": {}, \"uncovered_m2\": {:.1}, \
+         \"dropped_m2\": {:.2}, \"remainder_m2\": {:.1}, \"remainder_s\": {remainder_s:.3}, \"replan_s\": {replan_s:.3}, \
+         \"total_s\": {:.3}, \"regions\": {}, \"replan_length_m\": {:.0}, \"unfinished_length_m\": {unfinished:.0}, \
+         \"length_ratio\": {:.3}, \"coverage_pct\": {:.2}, \"collisions\": {}, \"chose\": \"{}/{}\"}}",
+        space.geometry().len(),
+        polyline_length(&path),
+        rem.pieces_before,
+        rem.pieces_after,
+        rem.work_pieces,
+        rem.uncovered_area_m2(),
+        rem.dropped_area_m2(),
+        rem.area_m2(),
+        remainder_s + replan_s,
+        out.regions.len(),
+        m.length_m,
+        m.length_m / unfinished.max(1e-9),
+        m.coverage_pct,
+        m.collisions,
+        out.decomposition.name(),
+        out.pattern.name(),
+    );
+    Ok(())
+}
+
+fn main() {
+    let mut args: Vec<String> = std::env::args().skip(1).collect();
+    if args.is_empty() {
+        let hall = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenarios/malaga-telecom-hall");
+        args = vec![hall.display().to_string(), "200".into(), "224".into()];
+    }
+    for a in args {
+        let (name, space) = match a.parse::<f64>() {
+            Ok(side) => (format!("generated {side} m"), generated(side)),
+            Err(_) => (
+                Path::new(&a)
+                    .file_name()
+                    .map_or(a.clone(), |n| n.to_string_lossy().into_owned()),
+                scene(Path::new(&a)),
+            ),
+        };
+        if let Err(e) = space.and_then(|s| bench(&name, &s)) {
+            eprintln!("{name}: {e}");
+        }
+    }
+}
