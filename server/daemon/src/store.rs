@@ -63,6 +63,13 @@ pub enum Write<'a> {
     },
     /// A settled plan forgotten (`retain_plans`): its record, document, corrections and history.
     Forget(&'a str),
+    /// A plan's new document (a replan) with its record; the corrections of earlier versions are dropped.
+    Replace {
+        /// The record at the new version.
+        record: &'a PlanRecord,
+        /// The document.
+        doc: &'a PlanDocument,
+    },
     /// A mission record.
     Mission(&'a MissionRecord),
     /// A measured coverage raster.
@@ -86,6 +93,7 @@ impl<'a> Write<'a> {
             Command::StoreCorrection { record, correction, .. } => Self::Correction { record, correction },
             Command::ForgetPlan { plan_id } => Self::Forget(plan_id),
             Command::StoreMission(rec) => Self::Mission(rec),
+            Command::ReplacePlanDoc { record, doc } => Self::Replace { record, doc },
             Command::StoreCoverage(rec) => Self::Coverage(rec),
             _ => return None,
         })
@@ -211,6 +219,14 @@ impl Store {
                     txn.open_table(RESULTS)?.insert(plan_id, bytes.as_slice())?;
                 }
                 Write::Forget(plan_id) => forget_plan(&txn, plan_id)?,
+                Write::Replace { record, doc } => {
+                    let id = record.plan_id.as_str();
+                    txn.open_table(RESULTS)?
+                        .insert(id, serde_json::to_vec(doc)?.as_slice())?;
+                    txn.open_table(CORRECTIONS)?
+                        .retain_in((id, 0)..=(id, u64::MAX), |_, _| false)?;
+                    write_plan(&txn, record)?;
+                }
                 Write::Mission(rec) => {
                     let bytes = serde_json::to_vec(rec)?;
                     txn.open_table(MISSIONS)?

@@ -6,6 +6,7 @@ mod events;
 mod fleet;
 mod missions;
 mod plans;
+mod replan;
 
 use std::sync::Arc;
 
@@ -172,6 +173,9 @@ impl Engine {
             Event::MissionAssignRequested { mission_id, docs } => {
                 self.assign_mission(&mission_id, docs, now_ms, &mut out)?;
             }
+            Event::MissionReplanRequested { mission_id } => {
+                self.request_replan(&mission_id, "requested".into(), now_ms, &mut out)?;
+            }
             Event::MissionFinished { mission_id, outcome } => {
                 self.mission_finished(&mission_id, outcome, now_ms, &mut out);
             }
@@ -179,6 +183,9 @@ impl Engine {
                 self.draining = true;
                 self.flush_coverage(now_ms, true, true, &mut out);
             }
+        }
+        if !self.missions.is_empty() {
+            self.watch_mission_robots(now_ms, &mut out);
         }
         self.pump(now_ms, &mut out);
         if !self.missions.is_empty() {
@@ -282,6 +289,8 @@ impl Engine {
 mod fleet_tests;
 #[cfg(test)]
 mod mission_tests;
+#[cfg(test)]
+mod replan_tests;
 #[cfg(test)]
 mod tests;
 #[cfg(test)]

@@ -41,10 +41,33 @@ pub struct MissionRecord {
     pub warnings: Vec<String>,
     /// How many times a worker started it.
     pub attempts: u32,
+    /// Robots whose parts were divided among the others (lost while driving); they take a share again when
+    /// they come back.
+    #[serde(default)]
+    pub dropped: Vec<String>,
+    /// A replan of what is left, waiting for a worker or running.
+    #[serde(default)]
+    pub replan: Option<ReplanOrder>,
+    /// Replans done.
+    #[serde(default)]
+    pub replans: u32,
     /// Accepted at, milliseconds since the Unix epoch.
     pub created_ms: u64,
     /// Last change, milliseconds since the Unix epoch.
     pub updated_ms: u64,
+}
+
+/// Why and for whom a mission's remainder is replanned.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ReplanOrder {
+    /// Why (`requested`, `robot r2 lost`, `robot r2 came back`, `the daemon restarted`).
+    pub reason: String,
+    /// Its job runs; the ids of the robots it plans for, in the mission's order.
+    #[serde(default)]
+    pub running: Option<Vec<String>>,
+    /// Asked again while it ran: run once more when it ends (the fleet changed under it).
+    #[serde(default)]
+    pub again: bool,
 }
 
 /// The division's and the plans' figures together.
@@ -129,17 +152,19 @@ impl MissionRecord {
         }
     }
 
-    /// The status its plans give a planned mission: `done` when every plan was driven to its end, `failed` when
-    /// all are settled and some were not driven (cancelled or failed; a replan of the remainder picks up),
+    /// The status its plans give a planned mission (the plans of dropped robots aside): `done` when every plan
+    /// was driven to its end, `failed` when all are settled and some were not driven (cancelled or failed; a
+    /// replan of the remainder picks up) or no robot is left,
     /// `active` while any is driven or some are done, else `ready`.
     pub fn status_from_plans(&self, plans: &HashMap<String, PlanRecord>) -> MissionStatus {
-        let statuses: Vec<PlanStatus> = self
-            .plan_ids
-            .iter()
-            .map(|id| plans.get(id).map_or(PlanStatus::Cancelled, |r| r.status))
+        let statuses: Vec<PlanStatus> = (self.plan_ids.iter().zip(&self.request.robots))
+            .filter(|(_, r)| !self.dropped.contains(&r.id))
+            .map(|(id, _)| plans.get(id).map_or(PlanStatus::Cancelled, |r| r.status))
             .collect();
         let settled = |s: &PlanStatus| matches!(s, PlanStatus::Done | PlanStatus::Failed | PlanStatus::Cancelled);
-        if statuses.iter().all(|s| *s == PlanStatus::Done) {
+        if statuses.is_empty() {
+            MissionStatus::Failed
+        } else if statuses.iter().all(|s| *s == PlanStatus::Done) {
             MissionStatus::Done
         } else if statuses.iter().all(settled) {
             MissionStatus::Failed

@@ -11,6 +11,8 @@ use shift_planner::geom::Point2;
 use shift_planner::map::grid::OccupancyGrid;
 use shift_planner::pipeline::PlanParams;
 use shift_planner::pipeline::fleet::{FleetParams, FleetPlan, plan_fleet};
+use shift_planner::pipeline::remainder::plan_fleet_remainder;
+use shift_planner::remainder::RemainderParams;
 use shift_planner::space::RobotShape;
 use shift_planner::speed::SpeedLimits;
 use shift_proto::{MissionRequest, PlanDocument};
@@ -37,6 +39,9 @@ pub struct MissionJob {
     /// Live obstacle points (x, y, map frame) marked occupied where the static map is free (filled in by the
     /// daemon, as for plan jobs; each dock is kept clear).
     pub overlay: Vec<[f64; 2]>,
+    /// A replan: the cells already swept (one flag per grid cell); only the rest is divided and planned, each
+    /// robot from its `start` (where it is now).
+    pub covered: Option<Arc<Vec<bool>>>,
 }
 
 /// One robot's planned part.
@@ -107,7 +112,18 @@ pub fn run_mission_job(job: &MissionJob) -> shift_planner::Result<FleetPlan> {
         Some(a) => Some(attribute_map(a, grid.geometry)?),
         None => None,
     };
-    plan_fleet(&grid, &robots, &params, attribute.as_ref(), &FleetParams::default())
+    match &job.covered {
+        None => plan_fleet(&grid, &robots, &params, attribute.as_ref(), &FleetParams::default()),
+        Some(covered) => Ok(plan_fleet_remainder(
+            &grid,
+            &robots,
+            covered,
+            (&params, &RemainderParams::default()),
+            attribute.as_ref(),
+            &FleetParams::default(),
+        )?
+        .fleet),
+    }
 }
 
 /// The outcome of a computed mission: a plan document per part (`compute_ms` is the whole job's time).

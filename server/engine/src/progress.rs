@@ -107,6 +107,10 @@ pub struct Assignment {
     /// Consecutive poses that fit only behind `index`.
     behind: u32,
     grid: Option<WaypointGrid>,
+    /// A plan replaced under a driving robot (a replan): until the robot is seen near the path's start, its
+    /// poses are those of the old plan it still drives, and must not be searched for on the new one (the
+    /// new one covers the old one's rest, so they would match far ahead, even at its end).
+    pub await_start: bool,
 }
 
 impl Assignment {
@@ -128,6 +132,7 @@ impl Assignment {
             index: 0,
             behind: 0,
             grid: None,
+            await_start: false,
         }
     }
 
@@ -212,6 +217,12 @@ impl Assignment {
             .map(|i| (i, (w[i].x - x).hypot(w[i].y - y)))
             .filter(|&(_, d)| d <= tol)
             .collect();
+        if self.await_start {
+            if local.is_empty() {
+                return Advance::Stayed;
+            }
+            self.await_start = false;
+        }
         if !local.is_empty() {
             self.behind = 0;
             // Nearest, ties to the earlier waypoint.

@@ -220,6 +220,13 @@ pub enum Decision {
         /// Plan.
         plan_id: String,
     },
+    /// [`Command::ReplacePlanDoc`]: a replan's document replaces a plan's.
+    ReplacePlan {
+        /// The plan's status at the new version.
+        status: PlanStatusResponse,
+        /// Waypoints in the new document.
+        waypoints: usize,
+    },
     /// [`Command::StartMission`].
     StartMission {
         /// Mission id.
@@ -346,6 +353,10 @@ impl From<&Command> for Decision {
             },
             Command::ForgetPlan { plan_id } => Self::ForgetPlan {
                 plan_id: plan_id.clone(),
+            },
+            Command::ReplacePlanDoc { record, doc } => Self::ReplacePlan {
+                status: record.to_response(),
+                waypoints: doc.waypoints.len(),
             },
             Command::StartMission(job) => Self::StartMission {
                 mission_id: job.mission_id.clone(),

@@ -29,6 +29,8 @@ pub struct Robot {
     pub id: String,
     /// Its liveliness token is present.
     pub alive: bool,
+    /// Its token was present and went away (not merely never seen).
+    pub gone: bool,
     /// Last pose.
     pub pose: Option<Pose2>,
     /// Last message or liveliness change, milliseconds since the Unix epoch.
@@ -69,6 +71,7 @@ impl Robots {
         self.robots.entry(id.to_owned()).or_insert_with(|| Robot {
             id: id.to_owned(),
             alive: false,
+            gone: false,
             pose: None,
             last_seen_ms: now_ms,
             assignment: None,

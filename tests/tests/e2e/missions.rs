@@ -249,6 +249,149 @@ async fn a_mission_on_a_backends_site_is_divided_planned_driven_measured_and_res
     Ok(())
 }
 
+/// A robot as a backend's robot software drives: it follows its plan by odometry and, when a new version of
+/// its plan arrives on its plan key (a replan), drops what it drives and follows the new one from its start;
+/// it stops for good once `stop_at` of its plan is driven (killed), else at the end of its latest version.
+async fn follow(
+    robot: ScriptedRobot,
+    name: &str,
+    first: shift_proto::PlanDocument,
+    stop_at: Option<f64>,
+) -> Result<u64> {
+    let updates = robot
+        .session
+        .declare_subscriber(format!("shift/default/robots/{name}/plan"))
+        .await
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let mut doc = first;
+    'plan: loop {
+        let w = doc.waypoints.clone();
+        let total: f64 = w.windows(2).map(|p| (p[1].x - p[0].x).hypot(p[1].y - p[0].y)).sum();
+        let mut driven = 0.0;
+        let mut sent = 0usize;
+        for pair in w.windows(2) {
+            let (a, b) = (pair[0], pair[1]);
+            let len = (b.x - a.x).hypot(b.y - a.y);
+            let yaw = (b.y - a.y).atan2(b.x - a.x);
+            let n = (len / 0.4).ceil().max(1.0) as usize;
+            for k in 0..n {
+                let f = k as f64 / n as f64;
+                if stop_at.is_some_and(|s| driven + f * len >= s * total) {
+                    drop(robot);
+                    return Ok(doc.version);
+                }
+                robot
+                    .odom(name, a.x + (b.x - a.x) * f, a.y + (b.y - a.y) * f, yaw)
+                    .await?;
+                sent += 1;
+                if sent.is_multiple_of(16) {
+                    tokio::time::sleep(Duration::from_millis(4)).await;
+                    if let Ok(Some(sample)) = updates.try_recv() {
+                        let next: shift_proto::PlanDocument = serde_json::from_slice(&sample.payload().to_bytes())?;
+                        if next.version > doc.version {
+                            doc = next;
+                            continue 'plan;
+                        }
+                    }
+                }
+            }
+            driven += len;
+        }
+        // At the end: stand there (odometry goes on) until a newer version comes or a while passes.
+        let deadline = tokio::time::Instant::now() + Duration::from_secs(8);
+        if let Some(last) = w.last() {
+            while tokio::time::Instant::now() < deadline {
+                robot.odom(name, last.x, last.y, 0.0).await?;
+                if let Ok(Some(sample)) = updates.try_recv() {
+                    let next: shift_proto::PlanDocument = serde_json::from_slice(&sample.payload().to_bytes())?;
+                    if next.version > doc.version {
+                        doc = next;
+                        continue 'plan;
+                    }
+                }
+                tokio::time::sleep(Duration::from_millis(100)).await;
+            }
+        }
+        return Ok(doc.version);
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_robot_killed_at_thirty_percent_hands_its_rest_to_the_others_who_finish() -> Result<()> {
+    let dir = tempfile::tempdir()?;
+    let (config, endpoint) = fleet_config(dir.path())?;
+    let server = TestServer::start(config).await?;
+    upload_warehouse(&server).await?;
+    let (_, accepted) = server.post("/v1/missions", &mission_body(&ROBOTS)).await?;
+    let id = accepted["mission_id"].as_str().context("mission_id")?.to_owned();
+    let path = format!("/v1/missions/{id}");
+    poll(
+        async || {
+            let (_, m) = server.get(&path).await?;
+            Ok((m["status"] == "ready").then_some(()))
+        },
+        "the mission to be planned",
+    )
+    .await?;
+    let mut robots = Vec::new();
+    for (name, _) in ROBOTS {
+        robots.push(ScriptedRobot::join(&endpoint, name).await?);
+        wait_robot_alive(&server, name).await?;
+    }
+    let (code, _) = server.post(&format!("{path}/assign"), &json!({})).await?;
+    assert_eq!(code, 200);
+    let mut tasks = Vec::new();
+    for ((name, _), r) in ROBOTS.iter().zip(robots) {
+        let doc = r.query_plan(name, Duration::from_secs(10)).await?;
+        // wh3 is killed (its session and token gone) at 30 % of its plan.
+        let stop = (*name == "wh3").then_some(0.3);
+        tasks.push(tokio::spawn(follow(r, name, doc, stop)));
+    }
+    let mut versions = Vec::new();
+    for t in tasks {
+        versions.push(t.await??);
+    }
+    assert_eq!(versions[2], 1, "wh3 was killed on its first version");
+    assert!(
+        versions[..2].iter().all(|&v| v >= 2),
+        "the others got new versions: {versions:?}"
+    );
+    let done = poll(
+        async || {
+            let (_, m) = server.get(&path).await?;
+            Ok((m["status"] == "done").then_some(m))
+        },
+        "the mission to be done",
+    )
+    .await?;
+    let measured = done["coverage"]["measured_pct"].as_f64().context("measured")?;
+    eprintln!(
+        "killed at 30 %: versions {versions:?}, measured {measured:.2} %, warnings {}",
+        done["warnings"]
+    );
+    if let Ok(dir) = std::env::var("SHIFT_TEST_ARTIFACTS") {
+        let png = server
+            .http
+            .get(server.url("/v1/sites/warehouse/coverage?format=png"))
+            .send()
+            .await?
+            .bytes()
+            .await?;
+        std::fs::write(Path::new(&dir).join("mission_killed_coverage.png"), &png)?;
+        for p in done["plans"].as_array().context("plans")? {
+            let pid = p["plan_id"].as_str().unwrap_or_default();
+            let (_, doc) = server.get(&format!("/v1/plans/{pid}")).await?;
+            eprintln!("{pid}: {}", doc["metrics"]);
+        }
+    }
+    assert!(measured >= 98.0, "{measured} % swept: {done}");
+    let plans = done["plans"].as_array().context("plans")?;
+    assert_eq!(plans[2]["status"], "cancelled", "wh3's part went to the others: {done}");
+    assert!(done["warnings"].to_string().contains("robot wh3 lost"), "{done}");
+    server.stop().await?;
+    Ok(())
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_mission_is_followed_over_sse_and_cancelled_with_its_plans() -> Result<()> {
     let dir = tempfile::tempdir()?;

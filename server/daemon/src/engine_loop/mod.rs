@@ -229,6 +229,12 @@ impl EngineLoop {
                     self.jobs.start_mission(*job);
                 }
                 Command::StoreMission(_) | Command::StoreCoverage(_) => {}
+                Command::ReplacePlanDoc { record, doc } => {
+                    self.plans_changed = true;
+                    p.views.set_record(record.clone());
+                    p.views.set_doc(&record.plan_id, doc);
+                    reply.plans.push(record);
+                }
                 Command::MissionChanged(view) => {
                     p.views.set_mission(view.clone());
                     // No subscriber is not an error.

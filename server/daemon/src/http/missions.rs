@@ -126,6 +126,31 @@ pub async fn assign_mission(
     }
 }
 
+/// Replan what the mission has left: the cells its robots' tools swept are left out, the rest (cleaned of
+/// slivers not worth a pass) is divided among its robots that are not lost, each from where it is, and each
+/// plan gets its next version (delivered to the robot driving it). Answers 202 at once; the view's plans show
+/// the new versions when the job ends. The daemon does the same by itself when a robot is lost or comes back
+/// and after a restart with the mission under way. 409 before the mission is planned or once it is done.
+#[utoipa::path(post, path = "/v1/missions/{id}/replan", tag = "missions", params(("id" = String, Path)),
+    responses((status = 202, body = MissionView),
+        (status = 401, description = "no bearer token", body = ErrorBody),
+        (status = 403, description = "wrong bearer token", body = ErrorBody),
+        (status = 404, body = ErrorBody), (status = 409, body = ErrorBody)))]
+pub async fn replan_mission(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+) -> Result<(StatusCode, ApiJson<MissionView>), ApiError> {
+    let reply = state
+        .engine
+        .call(Event::MissionReplanRequested { mission_id: id.clone() })
+        .await?;
+    let view = match reply.missions.into_iter().last() {
+        Some(v) => v,
+        None => mission_view(&state, &id)?,
+    };
+    Ok((StatusCode::ACCEPTED, ApiJson(view)))
+}
+
 /// Cancel a mission: its plans not yet driven are cancelled; a robot already driving its part finishes it
 /// (stopping it is the backend's call). 409 once the mission is done, failed or cancelled.
 #[utoipa::path(delete, path = "/v1/missions/{id}", tag = "missions", params(("id" = String, Path)),

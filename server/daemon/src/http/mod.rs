@@ -118,6 +118,7 @@ pub fn router(state: AppState) -> Router {
             get(missions::get_mission).delete(missions::cancel_mission),
         )
         .route("/v1/missions/{id}/assign", post(missions::assign_mission))
+        .route("/v1/missions/{id}/replan", post(missions::replan_mission))
         .route("/v1/robots", get(robots::list_robots))
         .route("/v1/robots/{id}", get(robots::get_robot))
         .layer(TimeoutLayer::with_status_code(

@@ -28,6 +28,7 @@ use utoipa::OpenApi;
         super::missions::get_mission,
         super::missions::assign_mission,
         super::missions::cancel_mission,
+        super::missions::replan_mission,
         super::missions::mission_events,
         super::missions::get_site_coverage,
         super::ops::healthz,

@@ -167,6 +167,11 @@ pub enum Event {
         /// Each plan's current document.
         docs: Vec<Arc<PlanDocument>>,
     },
+    /// A client asks to replan what a mission has left (`POST /v1/missions/{id}/replan`).
+    MissionReplanRequested {
+        /// Mission id.
+        mission_id: String,
+    },
     /// A mission job ended.
     MissionFinished {
         /// Mission id.
@@ -199,6 +204,7 @@ impl Event {
             Self::MissionCancelRequested { .. } => "mission_cancel_requested",
             Self::MissionAssignRequested { .. } => "mission_assign_requested",
             Self::MissionFinished { .. } => "mission_finished",
+            Self::MissionReplanRequested { .. } => "mission_replan_requested",
             Self::Shutdown => "shutdown",
         }
     }
@@ -216,6 +222,7 @@ impl Event {
                 | Self::MissionRequested { .. }
                 | Self::MissionCancelRequested { .. }
                 | Self::MissionAssignRequested { .. }
+                | Self::MissionReplanRequested { .. }
         )
     }
 }
@@ -252,6 +259,15 @@ pub enum Command {
     StartJob(PlanJob),
     /// Run this mission job on the worker pool; answer with [`Event::MissionFinished`].
     StartMission(Box<MissionJob>),
+    /// Persist a plan's new document (a replan: the whole path replaced at the next version) with its record, the
+    /// corrections of earlier versions dropped (the document is now the base), and show both; the plan's
+    /// subscribers and its robot hear of it by the commands that follow.
+    ReplacePlanDoc {
+        /// The plan's record at the new version.
+        record: PlanRecord,
+        /// The document.
+        doc: Arc<PlanDocument>,
+    },
     /// Persist a mission record (before acknowledging a request about it).
     StoreMission(MissionRecord),
     /// The read model's mission view changed (also sent to the mission's event subscribers).

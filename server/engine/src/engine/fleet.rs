@@ -23,6 +23,7 @@ const MAX_MOTION_M: f64 = 2.0;
 impl Engine {
     pub(super) fn liveliness(&mut self, robot: &str, alive: bool, now_ms: u64, out: &mut Vec<Command>) {
         let r = self.robots.entry(robot, now_ms);
+        r.gone = !alive && (r.alive || r.gone);
         r.alive = alive;
         // Lost keeps the time of its last message; a robot that comes back was seen now.
         if alive {

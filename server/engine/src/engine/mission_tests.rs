@@ -10,7 +10,7 @@ use crate::coverage::CoverageKey;
 use crate::mission_job::{MissionJob, MissionOutcome, planned_outcome, run_mission_job};
 use crate::robots::Pose2;
 
-fn mission_request() -> MissionRequest {
+pub(super) fn mission_request() -> MissionRequest {
     MissionRequest {
         site: "s".into(),
         robots: vec![
@@ -23,14 +23,14 @@ fn mission_request() -> MissionRequest {
     }
 }
 
-fn mission_job(cmds: &[Command]) -> Option<MissionJob> {
+pub(super) fn mission_job(cmds: &[Command]) -> Option<MissionJob> {
     cmds.iter().find_map(|c| match c {
         Command::StartMission(j) => Some((**j).clone()),
         _ => None,
     })
 }
 
-fn view(cmds: &[Command]) -> Option<MissionView> {
+pub(super) fn view(cmds: &[Command]) -> Option<MissionView> {
     cmds.iter().rev().find_map(|c| match c {
         Command::MissionChanged(v) => Some(v.clone()),
         _ => None,
@@ -38,7 +38,7 @@ fn view(cmds: &[Command]) -> Option<MissionView> {
 }
 
 /// Accepts the mission and runs its job for real: the engine with the mission planned, and the job.
-fn planned() -> (Engine, MissionJob) {
+pub(super) fn planned() -> (Engine, MissionJob) {
     let mut e = engine(1, 4);
     let c = e
         .handle(

@@ -87,6 +87,9 @@ impl Engine {
             error: None,
             warnings: Vec::new(),
             attempts: 0,
+            dropped: Vec::new(),
+            replan: None,
+            replans: 0,
             created_ms: now_ms,
             updated_ms: now_ms,
         };
@@ -134,6 +137,19 @@ impl Engine {
                     ));
                 }
                 out.push(Command::StoreMission(record.clone()));
+            }
+            // A replan waiting or running when the daemon stopped runs again; a mission under way is replanned
+            // from what was swept (its robots drove on, or stopped, while the daemon was away).
+            if let Some(order) = record.replan.as_mut() {
+                order.running = None;
+                self.queue.push_back(record.mission_id.clone());
+            } else if record.status == MissionStatus::Active && geometry.is_some() {
+                record.replan = Some(crate::mission::ReplanOrder {
+                    reason: "the daemon restarted".into(),
+                    running: None,
+                    again: false,
+                });
+                self.queue.push_back(record.mission_id.clone());
             }
             let key = CoverageKey::Mission(record.mission_id.clone());
             let raster = match (geometry, &record.planned) {
@@ -183,6 +199,10 @@ impl Engine {
         let Some(m) = self.missions.get_mut(mission_id) else {
             return;
         };
+        if m.record.replan.is_some() && m.record.status != MissionStatus::Queued {
+            self.start_replan(mission_id, now_ms, out);
+            return;
+        }
         if m.record.status != MissionStatus::Queued {
             return;
         }
@@ -210,6 +230,7 @@ impl Engine {
                     request: m.record.request.clone(),
                     options,
                     overlay: Vec::new(),
+                    covered: None,
                 })));
                 let plan_ids = m.record.plan_ids.clone();
                 for id in plan_ids {
@@ -273,6 +294,34 @@ impl Engine {
         let Some(m) = self.missions.get_mut(mission_id) else {
             return;
         };
+        if m.record.replan.as_ref().is_some_and(|o| o.running.is_some()) {
+            match outcome {
+                MissionOutcome::Planned {
+                    parts,
+                    planned,
+                    warnings,
+                } if m.record.status != MissionStatus::Cancelled => {
+                    self.replanned(mission_id, parts, planned, warnings, now_ms, out);
+                }
+                MissionOutcome::Interrupted => {
+                    if let Some(o) = m.record.replan.as_mut() {
+                        o.running = None;
+                    }
+                    out.push(Command::StoreMission(m.record.clone()));
+                    self.queue.push_front(mission_id.to_owned());
+                }
+                MissionOutcome::Failed { reason } => {
+                    m.record.replan = None;
+                    m.record
+                        .warnings
+                        .push(format!("the replan failed: {reason}; the plans stand"));
+                    out.push(Command::StoreMission(m.record.clone()));
+                }
+                MissionOutcome::Planned { .. } => m.record.replan = None,
+            }
+            self.push_mission_view(mission_id, now_ms, out);
+            return;
+        }
         if m.record.status != MissionStatus::Planning {
             return; // cancelled meanwhile
         }

@@ -219,3 +219,34 @@ mod props {
         }
     }
 }
+
+#[test]
+fn a_replaced_plan_waits_for_the_robot_at_its_start_before_searching_it() {
+    // The new plan starts at (0, 0) and sweeps out to (5, 0) and back; the robot still drives its old plan
+    // at (4, 0.1) heading +x, which the new one passes: without waiting that would be found far ahead.
+    let pts: Vec<(f64, f64)> = (0..=10)
+        .map(|i| (f64::from(i) * 0.5, 0.0))
+        .chain((0..10).rev().map(|i| (f64::from(i) * 0.5, 1.0)))
+        .collect();
+    let p = params(3);
+    let mut plain = Assignment::new("p-1".into(), doc(&pts));
+    assert!(matches!(
+        plain.advance(4.0, 0.1, Some(0.0), &p),
+        Advance::Reacquired { .. }
+    ));
+    let mut a = Assignment::new("p-1".into(), doc(&pts));
+    a.await_start = true;
+    for x in [3.0, 3.5, 4.0, 4.5] {
+        assert_eq!(
+            a.advance(x, 0.1, Some(0.0), &p),
+            Advance::Stayed,
+            "still on its old plan at {x}"
+        );
+    }
+    assert_eq!(a.index, 0);
+    // It reaches the start and drives on: progress as usual from there.
+    assert_eq!(a.advance(0.05, 0.0, Some(0.0), &p), Advance::Stayed);
+    assert!(!a.await_start);
+    assert_eq!(a.advance(1.0, 0.05, Some(0.0), &p), Advance::Forward);
+    assert_eq!(a.index, 2);
+}

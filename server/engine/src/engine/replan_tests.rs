@@ -1,0 +1,258 @@
+//! Replans of a mission's remainder in the engine: a robot lost part-way (its token gone) hands what it had
+//! left to the other, who gets a new version of its plan from where it stands; a restart with a mission under
+//! way replans it; an explicit replan before the mission is planned is refused.
+
+use shift_proto::{MissionStatus, PlanDocument, PlanStatus};
+
+use super::mission_tests::{mission_job, planned, view};
+use super::*;
+use crate::EngineError;
+use crate::coverage::CoverageKey;
+use crate::mission_job::{MissionOutcome, planned_outcome, run_mission_job};
+use crate::robots::Pose2;
+
+/// Poses every 0.1 m along `doc` from `from` to `upto` of its length.
+fn poses(doc: &PlanDocument, from: f64, upto: f64) -> Vec<Pose2> {
+    let total: f64 = doc
+        .waypoints
+        .windows(2)
+        .map(|w| (w[1].x - w[0].x).hypot(w[1].y - w[0].y))
+        .sum();
+    let (mut s, mut out) = (0.0, Vec::new());
+    for pair in doc.waypoints.windows(2) {
+        let (a, b) = (pair[0], pair[1]);
+        let len = (b.x - a.x).hypot(b.y - a.y);
+        let n = (len / 0.1).ceil().max(1.0) as usize;
+        for k in 0..=n {
+            let at = s + k as f64 / n as f64 * len;
+            if at >= from * total && at <= upto * total {
+                let f = k as f64 / n as f64;
+                out.push(Pose2 {
+                    x: a.x + (b.x - a.x) * f,
+                    y: a.y + (b.y - a.y) * f,
+                    yaw: (b.y - a.y).atan2(b.x - a.x),
+                    stamp_ns: 0,
+                });
+            }
+        }
+        s += len;
+    }
+    out
+}
+
+/// Odometry of several robots at once, a pose of each every 100 ms (a robot whose poses ran out repeats its
+/// last: it stands, but it is there); returns the time.
+fn drive(e: &mut Engine, robots: &[(&str, Vec<Pose2>)], t0: u64) -> u64 {
+    let n = robots.iter().map(|(_, p)| p.len()).max().unwrap_or(0);
+    let mut t = t0;
+    for k in 0..n {
+        t += 100;
+        for (robot, p) in robots {
+            let Some(pose) = p.get(k).or(p.last()).copied() else {
+                continue;
+            };
+            e.handle(
+                Event::RobotPose {
+                    robot: (*robot).into(),
+                    pose,
+                },
+                t,
+            )
+            .expect("pose");
+        }
+    }
+    t
+}
+
+fn alive(e: &mut Engine, robot: &str, alive: bool, t: u64) -> Vec<Command> {
+    e.handle(
+        Event::RobotLiveliness {
+            robot: robot.into(),
+            alive,
+        },
+        t,
+    )
+    .expect("liveliness")
+}
+
+fn delivered(cmds: &[Command]) -> Vec<(String, Arc<PlanDocument>)> {
+    cmds.iter()
+        .filter_map(|c| match c {
+            Command::PublishPlan { robot, doc } => Some((robot.clone(), doc.clone())),
+            _ => None,
+        })
+        .collect()
+}
+
+#[test]
+fn a_robot_lost_part_way_hands_its_rest_to_the_other_who_finishes_the_mission() {
+    let (mut e, job) = planned();
+    assert!(matches!(
+        e.handle(
+            Event::MissionReplanRequested {
+                mission_id: "m-9".into()
+            },
+            21
+        ),
+        Err(EngineError::UnknownMission(_))
+    ));
+    let fleet = run_mission_job(&job).expect("plans");
+    let MissionOutcome::Planned { parts, .. } = planned_outcome(&job, &fleet, 5.0) else {
+        unreachable!()
+    };
+    alive(&mut e, "r1", true, 25);
+    alive(&mut e, "r2", true, 25);
+    let c = e
+        .handle(
+            Event::MissionAssignRequested {
+                mission_id: "m-1".into(),
+                docs: parts.iter().map(|p| p.doc.clone()).collect(),
+            },
+            30,
+        )
+        .expect("assigned");
+    let docs = delivered(&c);
+    // Both drive a third of their parts; then r2's token goes away.
+    let t = drive(
+        &mut e,
+        &[("r1", poses(&docs[0].1, 0.0, 0.3)), ("r2", poses(&docs[1].1, 0.0, 0.3))],
+        1_000,
+    );
+    let before = e
+        .missions
+        .get("m-1")
+        .and_then(|m| m.raster.clone())
+        .expect("raster")
+        .pct();
+    assert!((20.0..60.0).contains(&before), "{before}");
+    let c = alive(&mut e, "r2", false, t + 10);
+    let job = mission_job(&c).expect("the rest is replanned at once");
+    assert_eq!(job.plan_ids, vec!["p-2".to_string()], "only r1 takes part");
+    let r1_at = e.robots.get("r1").and_then(|r| r.pose).expect("pose");
+    assert_eq!(
+        job.request.robots[0].start,
+        [r1_at.x, r1_at.y],
+        "r1 starts where it stands"
+    );
+    let covered = job.covered.clone().expect("a replan");
+    assert!(covered.iter().filter(|&&c| c).count() > 100);
+    assert_eq!(
+        e.mission("m-1").map(|m| m.dropped.clone()),
+        Some(vec!["r2".to_string()])
+    );
+    // r1 drives on while it computes; the replan's end gives r1 version 2 from where it stands.
+    let t = drive(&mut e, &[("r1", poses(&docs[0].1, 0.3, 0.35))], t + 20);
+    let fleet = run_mission_job(&job).expect("replans the remainder");
+    let c = e
+        .handle(
+            Event::MissionFinished {
+                mission_id: "m-1".into(),
+                outcome: planned_outcome(&job, &fleet, 5.0),
+            },
+            t + 10,
+        )
+        .expect("replanned");
+    let got = delivered(&c);
+    assert_eq!(got.len(), 1, "{got:?}");
+    let (robot, v2) = &got[0];
+    assert_eq!((robot.as_str(), v2.plan_id.as_str(), v2.version), ("r1", "p-2", 2));
+    assert!(
+        c.iter()
+            .any(|c| matches!(c, Command::ReplacePlanDoc { record, .. } if record.version == 2))
+    );
+    let first = v2.waypoints.first().expect("waypoints");
+    assert!((first.x - r1_at.x).hypot(first.y - r1_at.y) < 1.0, "v2 starts near r1");
+    assert_eq!(
+        e.plan("p-3").map(|r| r.status),
+        Some(PlanStatus::Cancelled),
+        "r2's part went to r1"
+    );
+    assert_eq!(e.robot("r2").and_then(|r| r.plan_id), None);
+    let v = view(&c).expect("view");
+    assert_eq!(v.status, MissionStatus::Active);
+    assert!(
+        v.warnings.iter().any(|w| w.contains("robot r2 lost")),
+        "{:?}",
+        v.warnings
+    );
+    // r1 drives version 2 to its end: the mission is done and the remainder was swept.
+    let t = drive(&mut e, &[("r1", poses(v2, 0.0, 1.0))], t + 100);
+    alive(&mut e, "r1", true, t + 2_000);
+    assert_eq!(e.mission("m-1").map(|m| m.status), Some(MissionStatus::Done));
+    let after = e.coverage(&CoverageKey::Mission("m-1".into())).expect("raster");
+    let pct = e.missions.get("m-1").and_then(|m| m.raster.as_ref()).map(|r| r.pct());
+    assert!(pct.is_some_and(|p| p >= 97.0), "{pct:?} {:?}", after.covered.runs.len());
+}
+
+#[test]
+fn a_restart_with_a_mission_under_way_replans_it_and_a_mission_not_planned_cannot_be() {
+    let (mut e, job) = planned();
+    let fleet = run_mission_job(&job).expect("plans");
+    let MissionOutcome::Planned { parts, .. } = planned_outcome(&job, &fleet, 5.0) else {
+        unreachable!()
+    };
+    e.handle(
+        Event::MissionAssignRequested {
+            mission_id: "m-1".into(),
+            docs: parts.iter().map(|p| p.doc.clone()).collect(),
+        },
+        30,
+    )
+    .expect("assigned");
+    let t = drive(&mut e, &[("r1", poses(&parts[0].doc, 0.0, 0.5))], 1_000);
+    e.handle(Event::Shutdown, t).expect("shutdown");
+    let Event::MapUploaded { site } = super::tests::site_event("s") else {
+        unreachable!()
+    };
+    let mut e2 = Engine::new(e.config().clone());
+    let c = e2
+        .handle(
+            Event::Restore {
+                sites: vec![site],
+                plans: e.plans.values().cloned().collect(),
+                active: parts.iter().map(|p| p.doc.clone()).collect(),
+                missions: vec![e.mission("m-1").cloned().expect("m")],
+                coverage: vec![e.coverage(&CoverageKey::Mission("m-1".into())).expect("raster")],
+            },
+            t + 100,
+        )
+        .expect("restored");
+    let job = mission_job(&c).expect("replanned after the restart");
+    assert_eq!(job.plan_ids.len(), 2);
+    assert!(
+        job.covered.as_ref().is_some_and(|c| c.iter().any(|&x| x)),
+        "from what was swept"
+    );
+    // r1 starts where its plan says it is (no odometry since the restart), r2 at its dock.
+    let on_plan = parts[0]
+        .doc
+        .waypoints
+        .iter()
+        .any(|w| [w.x, w.y] == job.request.robots[0].start);
+    assert!(on_plan, "{:?}", job.request.robots[0].start);
+    // A mission still queued cannot be replanned.
+    let mut e3 = super::tests::engine(1, 4);
+    e3.handle(
+        Event::PlanRequested {
+            request: super::tests::request("s"),
+        },
+        1,
+    )
+    .expect("busy");
+    e3.handle(
+        Event::MissionRequested {
+            request: super::mission_tests::mission_request(),
+        },
+        2,
+    )
+    .expect("queued");
+    assert!(matches!(
+        e3.handle(
+            Event::MissionReplanRequested {
+                mission_id: "m-2".into()
+            },
+            3
+        ),
+        Err(EngineError::MissionState { .. })
+    ));
+}
