@@ -42,6 +42,7 @@ impl Config {
                 0 => usize::MAX,
                 n => n,
             },
+            coverage_commit_ms: self.store.coverage_commit_s.saturating_mul(1000),
         }
     }
 }
@@ -133,6 +134,9 @@ pub struct StoreConfig {
     /// The database's page cache, MiB (redb's own default is 1 GiB: a daemon that runs for months would
     /// grow to it as its file does). Reads beyond it go to the file (the OS page cache still helps).
     pub cache_mb: usize,
+    /// Seconds between commits of the measured coverage rasters while robots sweep (they are committed when
+    /// the daemon stops too): what a kill -9 can lose of what was swept.
+    pub coverage_commit_s: u64,
 }
 
 impl StoreConfig {
@@ -140,6 +144,11 @@ impl StoreConfig {
     pub fn validate(&self) -> Result<()> {
         if self.cache_mb == 0 {
             return Err(crate::error::DaemonError::config("[store] cache_mb must be at least 1"));
+        }
+        if self.coverage_commit_s == 0 {
+            return Err(crate::error::DaemonError::config(
+                "[store] coverage_commit_s must be at least 1",
+            ));
         }
         Ok(())
     }
@@ -151,6 +160,7 @@ impl Default for StoreConfig {
             data_dir: PathBuf::from("./shift-data"),
             retain_plans: 10_000,
             cache_mb: 64,
+            coverage_commit_s: 10,
         }
     }
 }

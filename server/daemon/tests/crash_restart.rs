@@ -118,3 +118,125 @@ async fn after_kill_9_progress_is_recovered_and_corrections_continue_from_the_co
     drop(daemon);
     Ok(())
 }
+
+/// Odometry along `doc` every 0.3 m from 0 to `upto` of its length (stamps from `t`, 20 ms apart), then 1.5 s
+/// standing there, still publishing (robots do; the daemon commits what was swept on its own cadence).
+async fn drive_part(robot: &Robot, doc: &PlanDocument, upto: f64, t: &mut i64) -> Result<()> {
+    let w = &doc.waypoints;
+    let total: f64 = w.windows(2).map(|p| (p[1].x - p[0].x).hypot(p[1].y - p[0].y)).sum();
+    let (mut s, mut last, mut sent) = (0.0, (w[0].x, w[0].y, 0.0), 0usize);
+    'path: for p in w.windows(2) {
+        let (a, b) = (p[0], p[1]);
+        let len = (b.x - a.x).hypot(b.y - a.y);
+        let n = (len / 0.3).ceil().max(1.0) as usize;
+        for k in 0..n {
+            let f = k as f64 / n as f64;
+            if s + f * len > upto * total {
+                break 'path;
+            }
+            last = (
+                a.x + (b.x - a.x) * f,
+                a.y + (b.y - a.y) * f,
+                (b.y - a.y).atan2(b.x - a.x),
+            );
+            robot.odom(last.0, last.1, last.2, *t).await?;
+            *t += 20_000_000;
+            sent += 1;
+            if sent.is_multiple_of(16) {
+                tokio::time::sleep(Duration::from_millis(4)).await;
+            }
+        }
+        s += len;
+    }
+    for _ in 0..15 {
+        robot.odom(last.0, last.1, last.2, *t).await?;
+        *t += 100_000_000;
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+    Ok(())
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn after_kill_9_a_mission_and_what_was_swept_are_restored_and_only_the_rest_is_replanned() -> Result<()> {
+    let dir = tempfile::tempdir()?;
+    let (port, zport) = (free_port()?, free_port()?);
+    let endpoint = format!("tcp/127.0.0.1:{zport}");
+    let config = format!("{CONFIG}[store]\ncoverage_commit_s = 1\n");
+    let daemon = Daemon::start(dir.path(), port, &endpoint, &config).await?;
+    let robot = |id: &str, start: [f64; 2]| json!({"id": id, "start": start, "radius": 0.15, "tool_width": 0.3});
+    let req = json!({"site": "demo", "robots": [robot("k1", [0.5, 0.5]), robot("k2", [7.5, 7.5])]});
+    let (code, acc) = daemon.post("/v1/missions", &req).await?;
+    assert_eq!(code, 202, "{acc}");
+    let id = acc["mission_id"].as_str().context("mission id")?.to_owned();
+    let path = format!("/v1/missions/{id}");
+    let mut ready = Value::Null;
+    for _ in 0..2400 {
+        let (_, m) = daemon.get(&path).await?;
+        if m["status"] == "ready" {
+            ready = m;
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    assert_eq!(ready["status"], "ready", "{ready}");
+    let robots = [Robot::join(&endpoint, "k1").await?, Robot::join(&endpoint, "k2").await?];
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    let (code, active) = daemon.post(&format!("{path}/assign"), &json!({})).await?;
+    assert_eq!(code, 200, "{active}");
+    // Both robots drive half of their parts.
+    let mut t = 10_000_000_000i64;
+    let mut areas = Vec::new();
+    for (r, p) in robots.iter().zip(ready["plans"].as_array().context("plans")?) {
+        let pid = p["plan_id"].as_str().context("plan id")?;
+        let (_, doc) = daemon.get(&format!("/v1/plans/{pid}/path")).await?;
+        let doc: PlanDocument = serde_json::from_value(doc)?;
+        areas.push(doc.metrics.coverable_area_m2.context("area")?);
+        drive_part(r, &doc, 0.5, &mut t).await?;
+    }
+    let (_, before) = daemon.get(&path).await?;
+    let swept = before["coverage"]["measured_pct"].as_f64().context("measured")?;
+    assert!((25.0..75.0).contains(&swept), "half of each part swept: {before}");
+    daemon.kill9()?;
+
+    // Restarted: the mission and its raster are back (at most the last second of sweep lost), and the rest is
+    // replanned at once, for both robots.
+    let daemon = Daemon::start(dir.path(), port, &endpoint, &config).await?;
+    let mut after = Value::Null;
+    for _ in 0..2400 {
+        let (_, m) = daemon.get(&path).await?;
+        if m["plans"]
+            .as_array()
+            .is_some_and(|p| p.iter().all(|p| p["version"].as_u64() >= Some(2)))
+        {
+            after = m;
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    assert!(!after.is_null(), "the mission was replanned after the restart");
+    let restored = after["coverage"]["measured_pct"].as_f64().context("measured")?;
+    assert!(
+        restored >= swept - 1.0 && restored <= swept + 1e-9,
+        "{restored} % restored of {swept} %"
+    );
+    assert!(
+        after["warnings"].to_string().contains("the daemon restarted"),
+        "{after}"
+    );
+    for (p, area) in after["plans"].as_array().context("plans")?.iter().zip(&areas) {
+        let pid = p["plan_id"].as_str().context("plan id")?;
+        let (_, doc) = daemon.get(&format!("/v1/plans/{pid}/path")).await?;
+        let doc: PlanDocument = serde_json::from_value(doc)?;
+        let rest = doc.metrics.coverable_area_m2.context("area")?;
+        assert!(
+            rest < 0.8 * area,
+            "{pid}: the replan covers {rest} m² of a {area} m² part"
+        );
+        assert!(doc.metrics.coverage_pct >= 99.0, "{:?}", doc.metrics);
+    }
+    for r in robots {
+        r.leave().await?;
+    }
+    drop(daemon);
+    Ok(())
+}

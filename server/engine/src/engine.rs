@@ -7,6 +7,7 @@ mod fleet;
 mod missions;
 mod plans;
 mod replan;
+mod sweep;
 
 use std::sync::Arc;
 
@@ -44,6 +45,9 @@ pub struct EngineConfig {
     /// Settled plans kept (ready, done, failed, cancelled: not queued, planning or driven); the oldest beyond it
     /// are forgotten — by the engine, the read model and the store — when a new plan is accepted.
     pub retain_plans: usize,
+    /// Measured coverage rasters swept since are committed to the store at most this often (and when the
+    /// daemon stops), milliseconds: what a kill -9 can lose.
+    pub coverage_commit_ms: u64,
 }
 
 impl Default for EngineConfig {
@@ -56,6 +60,7 @@ impl Default for EngineConfig {
             blind_after_ms: 5_000,
             progress: ProgressParams::default(),
             retain_plans: usize::MAX,
+            coverage_commit_ms: 10_000,
         }
     }
 }

@@ -70,6 +70,9 @@ pub struct RecordedEngineConfig {
     /// [`EngineConfig::retain_plans`](crate::EngineConfig::retain_plans) (absent: every plan kept).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub retain_plans: Option<usize>,
+    /// [`EngineConfig::coverage_commit_ms`](crate::EngineConfig::coverage_commit_ms) (absent: the default).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub coverage_commit_ms: Option<u64>,
     /// Recording format ([`FORMAT`]; absent in format 1).
     #[serde(default = "format_one")]
     pub format: u32,
@@ -91,6 +94,7 @@ impl RecordedEngineConfig {
             blind_after_ms: self.blind_after_ms.unwrap_or(defaults.blind_after_ms),
             progress: defaults.progress,
             retain_plans: self.retain_plans.unwrap_or(defaults.retain_plans),
+            coverage_commit_ms: self.coverage_commit_ms.unwrap_or(defaults.coverage_commit_ms),
         }
     }
 
@@ -104,6 +108,7 @@ impl RecordedEngineConfig {
             default_site: config.default_site.clone(),
             blind_after_ms: Some(config.blind_after_ms),
             retain_plans: (config.retain_plans != usize::MAX).then_some(config.retain_plans),
+            coverage_commit_ms: Some(config.coverage_commit_ms),
             format: FORMAT,
         }
     }

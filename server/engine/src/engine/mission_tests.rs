@@ -251,7 +251,7 @@ fn measured_coverage_is_committed_at_intervals_and_on_shutdown_and_restored() {
     assert!(!stores.is_empty(), "a drive of {} ms commits its sweep", t - 1_000);
     for w in stores.windows(2) {
         assert!(
-            w[1].0 - w[0].0 >= super::missions::COVERAGE_STORE_EVERY_MS || w[1].0 == w[0].0,
+            w[1].0 - w[0].0 >= e.config().coverage_commit_ms || w[1].0 == w[0].0,
             "{stores:?}"
         );
     }

@@ -4,8 +4,7 @@
 
 use std::sync::Arc;
 
-use shift_planner::geom::Point2;
-use shift_proto::{MissionRequest, MissionStatus, PlanDocument, PlanEvent, PlanStatus, WaypointKindDoc};
+use shift_proto::{MissionRequest, MissionStatus, PlanDocument, PlanEvent, PlanStatus};
 
 use super::{Command, Engine, JobOutcome};
 use crate::coverage::{CoverageKey, CoverageRecord, Raster};
@@ -13,16 +12,9 @@ use crate::error::{EngineError, Result};
 use crate::mission::{MissionRecord, validate_mission};
 use crate::mission_job::{MissionJob, MissionOutcome};
 use crate::plan::PlanRecord;
-use crate::robots::Pose2;
 
 /// A mission's view is pushed at most this often while only its progress moves, milliseconds.
 pub(super) const VIEW_EVERY_MS: u64 = 1_000;
-/// A site's raster goes to the read model at most this often, milliseconds.
-const COVERAGE_VIEW_EVERY_MS: u64 = 1_000;
-/// Swept rasters are committed to the store at most this often (and when the daemon stops), milliseconds.
-pub(super) const COVERAGE_STORE_EVERY_MS: u64 = 10_000;
-/// Motion longer than this between two poses is a jump (relocalisation), not a sweep, metres.
-const MAX_SWEEP_M: f64 = 2.0;
 
 /// What the engine holds of a mission besides its record.
 #[derive(Debug, Clone)]
@@ -524,88 +516,6 @@ impl Engine {
         touched.dedup();
         for id in touched {
             self.refresh_mission(&id, now_ms, out);
-        }
-    }
-
-    /// Stamps the tool's swath between two poses of `robot` into its site's raster and its mission's, when it
-    /// drives a plan and the stretch it is on sweeps (a `cover` waypoint behind or ahead of it).
-    pub(super) fn sweep(&mut self, robot: &str, prev: Option<Pose2>, pose: Pose2, now_ms: u64) {
-        let Some(prev) = prev else { return };
-        let (a, b) = (Point2::new(prev.x, prev.y), Point2::new(pose.x, pose.y));
-        if (b - a).norm() > MAX_SWEEP_M {
-            return;
-        }
-        let Some(asg) = self.robots.get(robot).and_then(|r| r.assignment.as_ref()) else {
-            return;
-        };
-        let kind = |i: usize| asg.doc.waypoints.get(i).map(|w| w.kind);
-        let tool_on =
-            kind(asg.index) == Some(WaypointKindDoc::Cover) || kind(asg.index + 1) == Some(WaypointKindDoc::Cover);
-        let Some(rec) = self.plans.get(&asg.plan_id) else {
-            return;
-        };
-        if !tool_on || rec.status != PlanStatus::Active {
-            return;
-        }
-        let half = rec.request.robot.tool_width / 2.0;
-        let site = rec.request.site.clone();
-        if let Some(m) = rec.mission.as_ref().and_then(|id| self.missions.get_mut(id))
-            && let Some(raster) = m.raster.as_mut()
-            && Arc::make_mut(raster).stamp(a, b, half, now_ms) > 0
-        {
-            m.dirty = true;
-        }
-        if let Some(g) = self.sites.get(&site).map(|s| s.map.grid.geometry) {
-            let raster = self
-                .site_coverage
-                .entry(site)
-                .or_insert_with(|| Arc::new(Raster::new(g, None)));
-            Arc::make_mut(raster).stamp(a, b, half, now_ms);
-        }
-    }
-
-    /// Pushes the rasters due: to the read model about once a second (and at once with `view_now`: a plan
-    /// ended, so the last of its sweep shows), to the store every [`COVERAGE_STORE_EVERY_MS`] (every dirty
-    /// one at once with `store_now`).
-    pub(super) fn flush_coverage(&mut self, now_ms: u64, store_now: bool, view_now: bool, out: &mut Vec<Command>) {
-        let store_due = store_now || now_ms >= self.coverage_stored_ms + COVERAGE_STORE_EVERY_MS;
-        let view_due = view_now || store_now || now_ms >= self.coverage_viewed_ms + COVERAGE_VIEW_EVERY_MS;
-        if !(store_due || view_due) {
-            return;
-        }
-        let mut dirty: Vec<(CoverageKey, &mut Arc<Raster>)> = Vec::new();
-        for (site, r) in &mut self.site_coverage {
-            dirty.push((CoverageKey::Site(site.clone()), r));
-        }
-        for (id, m) in &mut self.missions {
-            if let Some(r) = m.raster.as_mut() {
-                dirty.push((CoverageKey::Mission(id.clone()), r));
-            }
-        }
-        for (key, raster) in dirty {
-            let (to_store, to_view) = (
-                store_due && raster.dirty_store,
-                view_due && raster.dirty_view && matches!(key, CoverageKey::Site(_)),
-            );
-            if !(to_store || to_view) {
-                continue;
-            }
-            let r = Arc::make_mut(raster);
-            let record = Arc::new(r.record(key));
-            if to_store {
-                r.dirty_store = false;
-                out.push(Command::StoreCoverage(record.clone()));
-            }
-            if to_view {
-                r.dirty_view = false;
-                out.push(Command::CoverageChanged(record));
-            }
-        }
-        if store_due {
-            self.coverage_stored_ms = now_ms;
-        }
-        if view_due {
-            self.coverage_viewed_ms = now_ms;
         }
     }
 }
