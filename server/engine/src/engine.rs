@@ -16,10 +16,9 @@ use std::collections::{BTreeMap, HashMap, HashSet, VecDeque};
 use shift_proto::{PlanEvent, PlanStatus, PoseView, RobotView, SiteSummary};
 
 pub use self::events::{Command, Event, JobOutcome};
-use self::missions::MissionState;
 use crate::coverage::{CoverageKey, CoverageRecord, Raster};
 use crate::error::Result;
-use crate::mission::MissionRecord;
+use crate::mission::{MissionRecord, MissionState};
 use crate::plan::PlanRecord;
 use crate::progress::ProgressParams;
 use crate::robots::{Assignment, Robot, Robots};

@@ -2,6 +2,7 @@
 //! mission's view built from its plans.
 
 use std::collections::{HashMap, HashSet};
+use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 use shift_planner::geom::Point2;
@@ -11,6 +12,7 @@ use shift_proto::{
 };
 
 use crate::cell_mask::CellMask;
+use crate::coverage::Raster;
 use crate::error::{EngineError, Result};
 use crate::plan::PlanRecord;
 use crate::request::{ParsedOptions, validate};
@@ -177,6 +179,18 @@ impl MissionRecord {
             MissionStatus::Ready
         }
     }
+}
+
+/// What the engine holds of a mission besides its record.
+#[derive(Debug, Clone)]
+pub(crate) struct MissionState {
+    pub(crate) record: MissionRecord,
+    /// Its measured raster (once planned), counting the mission's coverable cells.
+    pub(crate) raster: Option<Arc<Raster>>,
+    /// When its view was last pushed.
+    pub(crate) view_ms: u64,
+    /// Its plans changed since.
+    pub(crate) dirty: bool,
 }
 
 fn invalid(msg: String) -> EngineError {

@@ -26,6 +26,11 @@ pub fn occupancy(site: &str) -> String {
     format!("/shift/sites/{site}/occupancy")
 }
 
+/// A site's measured coverage topic: `/shift/sites/{site}/coverage`.
+pub fn coverage(site: &str) -> String {
+    format!("/shift/sites/{site}/coverage")
+}
+
 /// The kind of a recorded channel; fixes its schema and encodings.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Kind {

@@ -5,6 +5,7 @@
 //! free, then unknown).
 
 use serde_json::{Value, json};
+use shift_engine::CoverageRecord;
 use shift_planner::map::grid::{CellState, OccupancyGrid};
 
 /// Most cells one grid message holds.
@@ -70,6 +71,38 @@ pub fn occupancy_grid(grid: &OccupancyGrid, live: &[(f64, f64)], frame: &str, st
     })
 }
 
+/// The grid message of a measured coverage raster at `stamp_ns`: one uint8 field `swept` (100 where the
+/// robots' tools swept, else 0), coarsened as [`occupancy_grid`] is (a coarse cell is swept when any of its
+/// cells is).
+pub fn coverage_grid(record: &CoverageRecord, frame: &str, stamp_ns: u64) -> Value {
+    let (gw, gh) = (record.width, record.height);
+    let mut k = 1usize;
+    while gw.div_ceil(k) * gh.div_ceil(k) > MAX_CELLS {
+        k += 1;
+    }
+    let (w, h) = (gw.div_ceil(k), gh.div_ceil(k));
+    let mut data = vec![0u8; w * h];
+    let swept = record.covered.decode(gw * gh).unwrap_or_default();
+    for (i, _) in swept.iter().enumerate().filter(|(_, s)| **s) {
+        data[(i / gw / k) * w + i % gw / k] = 100;
+    }
+    let cell = record.resolution * k as f64;
+    json!({
+        "timestamp": {"sec": stamp_ns / 1_000_000_000, "nsec": stamp_ns % 1_000_000_000},
+        "frame_id": frame,
+        "pose": {
+            "position": {"x": record.origin[0], "y": record.origin[1], "z": 0.0},
+            "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}
+        },
+        "column_count": w,
+        "cell_size": {"x": cell, "y": cell},
+        "row_stride": w,
+        "cell_stride": 1,
+        "fields": [{"name": "swept", "offset": 0, "type": UINT8}],
+        "data": base64(&data),
+    })
+}
+
 /// Standard base64 with padding (RFC 4648), as JSON Schema's `contentEncoding: base64` means.
 pub fn base64(bytes: &[u8]) -> String {
     const ABC: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
@@ -127,6 +160,24 @@ mod tests {
         expect[(4) * 2] = 0xff; // unknown (0, 1)
         expect[(2 * 4 + 3) * 2] = 100; // occupied (3, 2)
         assert_eq!(v["data"], base64(&expect));
+    }
+
+    #[test]
+    fn swept_cells_land_where_they_are() {
+        let rec = CoverageRecord {
+            key: shift_engine::CoverageKey::Site("s".into()),
+            width: 3,
+            height: 2,
+            resolution: 0.5,
+            origin: [1.0, 2.0],
+            covered: shift_engine::cell_mask::CellMask::encode(&[false, true, false, false, false, true]),
+            updated_ms: 0,
+        };
+        let v = coverage_grid(&rec, "map", 0);
+        assert_eq!(v["column_count"], 3);
+        assert_eq!(v["fields"][0]["name"], "swept");
+        assert_eq!(v["pose"]["position"]["x"], 1.0);
+        assert_eq!(v["data"], base64(&[0, 100, 0, 0, 0, 100]));
     }
 
     #[test]

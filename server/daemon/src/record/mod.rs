@@ -29,7 +29,7 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use crate::error::{Context, Result};
 use shift_engine::recorded::{Decision, RecordedDecisions, RecordedEngineConfig, RecordedInput};
-use shift_engine::{Command, EngineConfig, EngineError, Event, LiveMaps};
+use shift_engine::{Command, CoverageKey, CoverageRecord, EngineConfig, EngineError, Event, LiveMaps};
 use shift_planner::map::grid::OccupancyGrid;
 use shift_proto::keys::KeySpace;
 use shift_proto::{PlanDocument, PlanEvent, PlanStatusResponse};
@@ -79,6 +79,8 @@ enum Entry {
         docs: Vec<Arc<PlanDocument>>,
         statuses: Vec<PlanStatusResponse>,
     },
+    /// A site's measured coverage raster, as a `foxglove.Grid` on `/shift/sites/{site}/coverage`.
+    Coverage { log_ns: u64, record: Arc<CoverageRecord> },
     /// Finish the file and leave.
     Stop,
 }
@@ -216,6 +218,16 @@ impl Recorder {
                 match c {
                     Command::StoreResult { doc, .. } | Command::PublishPlan { doc, .. } => docs.push(doc.clone()),
                     Command::Publish(PlanEvent::Status(s)) => statuses.push(s.clone()),
+                    Command::CoverageChanged(record) => {
+                        let log_ns = now_ns();
+                        self.send(
+                            Entry::Coverage {
+                                log_ns,
+                                record: record.clone(),
+                            },
+                            0,
+                        );
+                    }
                     _ => {}
                 }
             }
@@ -490,6 +502,14 @@ impl WriterThread {
                         log_ns,
                         &serde_json::to_vec(&s)?,
                     )?;
+                }
+            }
+            Entry::Coverage { log_ns, record } => {
+                if let CoverageKey::Site(site) = &record.key {
+                    let msg = grid::coverage_grid(&record, &self.frame, log_ns);
+                    let topic = channels::coverage(site);
+                    self.files
+                        .write(Kind::Grid, &topic, log_ns, &serde_json::to_vec(&msg)?)?;
                 }
             }
             Entry::Stop => {}

@@ -9,24 +9,12 @@ use shift_proto::{MissionRequest, MissionStatus, PlanDocument, PlanEvent, PlanSt
 use super::{Command, Engine, JobOutcome};
 use crate::coverage::{CoverageKey, CoverageRecord, Raster};
 use crate::error::{EngineError, Result};
-use crate::mission::{MissionRecord, validate_mission};
+use crate::mission::{MissionRecord, MissionState, validate_mission};
 use crate::mission_job::{MissionJob, MissionOutcome};
 use crate::plan::PlanRecord;
 
 /// A mission's view is pushed at most this often while only its progress moves, milliseconds.
 pub(super) const VIEW_EVERY_MS: u64 = 1_000;
-
-/// What the engine holds of a mission besides its record.
-#[derive(Debug, Clone)]
-pub(super) struct MissionState {
-    pub record: MissionRecord,
-    /// Its measured raster (once planned), counting the mission's coverable cells.
-    pub raster: Option<Arc<Raster>>,
-    /// When its view was last pushed.
-    pub view_ms: u64,
-    /// Its plans changed since.
-    pub dirty: bool,
-}
 
 impl Engine {
     pub(super) fn request_mission(
