@@ -1,6 +1,6 @@
 //! The HTTP client: base URL, bearer token, and the plumbing every call shares (URLs, auth header, error
-//! bodies, JSON decoding). The calls themselves are grouped by resource in `sites.rs`, `plans.rs` and
-//! `robots.rs`.
+//! bodies, JSON decoding). The calls themselves are grouped by resource in `sites.rs`, `plans.rs`, `robots.rs`
+//! and `missions.rs`.
 
 use std::time::Duration;
 

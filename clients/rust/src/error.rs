@@ -29,7 +29,7 @@ pub enum ClientError {
         #[source]
         source: serde_json::Error,
     },
-    /// The event stream broke its format (not `text/event-stream`, an event that is not a plan event).
+    /// The event stream broke its format (not `text/event-stream`).
     #[error("event stream: {0}")]
     Stream(String),
     /// Waiting for something took longer than allowed.

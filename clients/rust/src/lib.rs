@@ -4,9 +4,10 @@
 //! types are `shift-proto`'s, re-exported as [`proto`]; nothing is redeclared here.
 //!
 //! - [`Client`]: sites and maps, plans (create, status, listing, path, speed profile, cancel, wait), typed
-//!   server-sent events ([`Client::events`]), robots and assignment. Every call returns
-//!   [`Result`]`<_, `[`ClientError`]`>`; an error answer carries the API's `{"error": {code, message}}` and
-//!   the HTTP status.
+//!   server-sent events ([`Client::events`]), robots and assignment, missions for a fleet (create, status,
+//!   assign, replan, cancel, their events as [`MissionEvents`]) and a site's measured coverage. Every call
+//!   returns [`Result`]`<_, `[`ClientError`]`>`; an error answer carries the API's `{"error": {code,
+//!   message}}` and the HTTP status.
 //! - [`robot`]: [`robot::FollowedPlan`] keeps a plan current under versioned corrections; with the `robot`
 //!   feature (default) [`robot::RobotLink`] receives plans and corrections over Zenoh and fetches the plan
 //!   when a version gap shows.
@@ -42,6 +43,7 @@
 
 mod client;
 mod error;
+mod missions;
 mod plans;
 pub mod robot;
 mod robots;
@@ -51,4 +53,4 @@ pub mod sse;
 pub use client::{Client, DEFAULT_BASE_URL};
 pub use error::{ClientError, Result};
 pub use shift_proto as proto;
-pub use sse::PlanEvents;
+pub use sse::{MissionEvents, PlanEvents};

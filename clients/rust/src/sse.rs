@@ -1,6 +1,7 @@
-//! `GET /v1/plans/{id}/events` as a typed stream: a small `text/event-stream` parser (the WHATWG rules this
-//! API needs: `event:`, `data:` lines joined by newlines, `id:`, comments, any of `\n`, `\r\n`, `\r` as line
-//! ends) over reqwest's byte stream, each event decoded into a [`PlanEvent`].
+//! `GET /v1/plans/{id}/events` and `GET /v1/missions/{id}/events` as typed streams: a small `text/event-stream`
+//! parser (the WHATWG rules this API needs: `event:`, `data:` lines joined by newlines, `id:`, comments, any of
+//! `\n`, `\r\n`, `\r` as line ends) over reqwest's byte stream, each event decoded into a [`PlanEvent`] or a
+//! [`MissionView`].
 
 use std::collections::VecDeque;
 use std::pin::Pin;
@@ -8,7 +9,8 @@ use std::task::{Context, Poll};
 
 use futures_util::stream::{BoxStream, Stream, StreamExt};
 use reqwest::Method;
-use shift_proto::PlanEvent;
+use serde::de::DeserializeOwned;
+use shift_proto::{MissionView, PlanEvent};
 
 use crate::client::{Client, segment};
 use crate::error::{ClientError, Result};
@@ -147,6 +149,52 @@ impl std::fmt::Debug for PlanEvents {
     }
 }
 
+/// A mission's events (`GET /v1/missions/{id}/events`), as a [`Stream`] of [`MissionView`]s: first its current
+/// view, then one on every change (about once a second at most while only progress and measured coverage
+/// move); it ends after `done`, `failed` or `cancelled`, or when the daemon shuts down. Events of other names
+/// (a newer daemon's) are skipped.
+pub struct MissionEvents {
+    inner: BoxStream<'static, Result<MissionView>>,
+}
+
+impl MissionEvents {
+    /// Follows the stream of events `bytes`.
+    pub(crate) fn new<B: AsRef<[u8]> + Send + 'static>(bytes: impl Stream<Item = Result<B>> + Send + 'static) -> Self {
+        Self {
+            inner: typed(bytes, |name| name == "mission").boxed(),
+        }
+    }
+
+    /// The next view; `None` at the end of the stream.
+    ///
+    /// ```no_run
+    /// # async fn run() -> shift_client::Result<()> {
+    /// # let client = shift_client::Client::new("http://127.0.0.1:7878")?;
+    /// let mut views = client.mission_events("m-1").await?;
+    /// while let Some(view) = views.next_view().await? {
+    ///     println!("{} {:.0} %", view.status.as_str(), view.progress * 100.0);
+    /// }
+    /// # Ok(()) }
+    /// ```
+    pub async fn next_view(&mut self) -> Result<Option<MissionView>> {
+        self.inner.next().await.transpose()
+    }
+}
+
+impl Stream for MissionEvents {
+    type Item = Result<MissionView>;
+
+    fn poll_next(mut self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<Option<Self::Item>> {
+        self.inner.as_mut().poll_next(cx)
+    }
+}
+
+impl std::fmt::Debug for MissionEvents {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("MissionEvents")
+    }
+}
+
 impl Client {
     /// `GET /v1/plans/{id}/events`: the plan's server-sent events, typed. Errors of the request itself (404
     /// for an unknown plan) come here; a broken stream later comes as an `Err` item.
@@ -169,8 +217,19 @@ impl Client {
     /// ```
     pub async fn events(&self, plan_id: &str) -> Result<PlanEvents> {
         let path = format!("/v1/plans/{}/events", segment(plan_id));
+        let bytes = self.open_stream(&path).await?;
+        Ok(PlanEvents {
+            inner: typed(bytes, |_| true).boxed(),
+        })
+    }
+
+    /// Opens `GET {path}` as an event stream: its bytes, once the answer is a 2xx `text/event-stream`.
+    pub(crate) async fn open_stream(
+        &self,
+        path: &str,
+    ) -> Result<impl Stream<Item = Result<impl AsRef<[u8]> + Send + 'static>> + Send + 'static> {
         let rb = self
-            .request(Method::GET, &path)
+            .request(Method::GET, path)
             .header(reqwest::header::ACCEPT, "text/event-stream");
         let response = self.send(rb).await?;
         let content_type = response
@@ -184,21 +243,23 @@ impl Client {
                 "expected text/event-stream, got {content_type:?}"
             )));
         }
-        Ok(PlanEvents {
-            inner: typed(response.bytes_stream().map(|r| r.map_err(ClientError::from))).boxed(),
-        })
+        Ok(response.bytes_stream().map(|r| r.map_err(ClientError::from)))
     }
 }
 
-/// Frames and decodes a byte stream.
-fn typed<B: AsRef<[u8]> + Send + 'static>(
+/// Frames and decodes a byte stream: each event whose name `wanted` accepts, as a `T`; others are skipped.
+pub(crate) fn typed<T: DeserializeOwned + Send + 'static, B: AsRef<[u8]> + Send + 'static>(
     bytes: impl Stream<Item = Result<B>> + Send + 'static,
-) -> impl Stream<Item = Result<PlanEvent>> + Send + 'static {
+    wanted: fn(&str) -> bool,
+) -> impl Stream<Item = Result<T>> + Send + 'static {
     let state = (Box::pin(bytes), SseParser::default(), false);
-    futures_util::stream::unfold(state, |(mut bytes, mut parser, mut done)| async move {
+    futures_util::stream::unfold(state, move |(mut bytes, mut parser, mut done)| async move {
         loop {
             if let Some(frame) = parser.next_frame() {
-                let event = serde_json::from_str::<PlanEvent>(&frame.data).map_err(|source| ClientError::Decode {
+                if !wanted(&frame.event) {
+                    continue;
+                }
+                let event = serde_json::from_str::<T>(&frame.data).map_err(|source| ClientError::Decode {
                     what: format!("a {:?} event", frame.event),
                     source,
                 });
@@ -245,6 +306,24 @@ mod tests {
             assert_eq!(got[1].id.as_deref(), Some("7"));
             assert_eq!(got[2].event, "message");
         }
+    }
+
+    #[tokio::test]
+    async fn mission_streams_decode_mission_events_and_skip_others() {
+        let view = r#"{"mission_id":"m-1","site":"s","status":"planning","progress":0.5,"plans":[{"robot":"r1",
+            "plan_id":"p-1","status":"planning","version":0,"driven_fraction":0.0}],"coverage":{"measured_pct":0.0},
+            "created_ms":1,"updated_ms":2,"later_field":true}"#
+            .replace('\n', "");
+        let text = format!(
+            ": keep-alive\n\nevent: mission\ndata: {view}\n\nevent: other\ndata: 1\n\nevent: mission\ndata: {{\n\n"
+        );
+        let chunks: Vec<Result<Vec<u8>>> = text.as_bytes().chunks(5).map(|c| Ok(c.to_vec())).collect();
+        let mut events = MissionEvents::new(futures_util::stream::iter(chunks));
+        let first = events.next_view().await.expect("decodes").expect("a view");
+        assert_eq!((first.mission_id.as_str(), first.plans.len()), ("m-1", 1));
+        assert_eq!(first.status, shift_proto::MissionStatus::Planning);
+        assert!(matches!(events.next_view().await, Err(ClientError::Decode { .. })));
+        assert!(events.next_view().await.expect("ends").is_none());
     }
 
     #[test]

@@ -3,11 +3,11 @@
 - :class:`Client`: the HTTP/JSON API (DESIGN §5.3), synchronous, over httpx; errors raise :class:`ShiftError`.
 - :class:`Robot`: a robot's side over Zenoh (DESIGN §5.4): liveliness token, odometry and clouds out, plan and
   corrections in, corrections applied by version with a plan query on a gap.
-- The wire documents as dataclasses (:mod:`shift_client.types`), plan events (:mod:`shift_client.events`) and
-  the key expressions (:class:`KeySpace`).
+- The wire documents as dataclasses (:mod:`shift_client.types`), plan and mission events
+  (:mod:`shift_client.events`) and the key expressions (:class:`KeySpace`).
 """
 
-from .client import DEFAULT_URL, Client, PlanEvents
+from .client import DEFAULT_URL, Client, MissionEvents, PlanEvents
 from .errors import ShiftError
 from .events import (
     CorrectionEvent,
@@ -21,9 +21,16 @@ from .keys import InvalidName, KeySpace
 from .robot import DEFAULT_ENDPOINT, Robot, peer_config
 from .types import (
     FINAL_STATUSES,
+    MISSION_SETTLED_STATUSES,
     AttributeBlob,
     Correction,
     CorrectionError,
+    MissionAccepted,
+    MissionCoverage,
+    MissionPlanView,
+    MissionRequest,
+    MissionRobot,
+    MissionView,
     OccupancyGrid,
     PlanAccepted,
     PlanDocument,
@@ -45,6 +52,7 @@ __all__ = [
     "DEFAULT_ENDPOINT",
     "DEFAULT_URL",
     "FINAL_STATUSES",
+    "MISSION_SETTLED_STATUSES",
     "AttributeBlob",
     "Client",
     "Correction",
@@ -52,6 +60,13 @@ __all__ = [
     "CorrectionEvent",
     "InvalidName",
     "KeySpace",
+    "MissionAccepted",
+    "MissionCoverage",
+    "MissionEvents",
+    "MissionPlanView",
+    "MissionRequest",
+    "MissionRobot",
+    "MissionView",
     "OccupancyGrid",
     "PlanAccepted",
     "PlanDocument",

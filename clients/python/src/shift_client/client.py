@@ -6,13 +6,16 @@ import re
 import time
 from urllib.parse import quote
 from pathlib import Path
-from typing import Any, Iterator, List, Optional, Union
+from typing import Any, Generic, Iterator, List, Optional, TypeVar, Union
 
 import httpx
 
 from .errors import ShiftError, error_for
-from .events import PlanEvent, decode_messages, iter_sse
+from .events import PlanEvent, decode_messages, decode_mission_messages, iter_sse
 from .types import (
+    MissionAccepted,
+    MissionRequest,
+    MissionView,
     OccupancyGrid,
     PlanAccepted,
     PlanDocument,
@@ -31,23 +34,22 @@ def _seg(value: str) -> str:
     return quote(value, safe="")
 
 
-class PlanEvents:
-    """An open ``GET /v1/plans/{id}/events`` stream: iterate it for typed events; close it (or use it as a
-    context manager) to hang up. Iteration ends when the daemon ends the stream (after a ``done``, ``failed``
-    or ``cancelled`` status, or on shutdown). Close it from the thread that iterates (break, then close): a
-    thread blocked waiting for the next event is not woken by a close from elsewhere until an event or a
-    keep-alive comes."""
+T = TypeVar("T")
 
-    def __init__(self, response: httpx.Response) -> None:
+
+class _EventStream(Generic[T]):
+    """An open Server-Sent Events answer, iterated as typed items; closed when iteration ends."""
+
+    def __init__(self, response: httpx.Response, items: Iterator[T]) -> None:
         self._response = response
-        self._events = decode_messages(iter_sse(response.iter_lines()))
+        self._items = items
 
-    def __iter__(self) -> Iterator[PlanEvent]:
+    def __iter__(self) -> Iterator[T]:
         return self
 
-    def __next__(self) -> PlanEvent:
+    def __next__(self) -> T:
         try:
-            return next(self._events)
+            return next(self._items)
         except StopIteration:
             self.close()
             raise
@@ -56,7 +58,34 @@ class PlanEvents:
         """Hangs up."""
         self._response.close()
 
+
+class PlanEvents(_EventStream[PlanEvent]):
+    """An open ``GET /v1/plans/{id}/events`` stream: iterate it for typed events; close it (or use it as a
+    context manager) to hang up. Iteration ends when the daemon ends the stream (after a ``done``, ``failed``
+    or ``cancelled`` status, or on shutdown). Close it from the thread that iterates (break, then close): a
+    thread blocked waiting for the next event is not woken by a close from elsewhere until an event or a
+    keep-alive comes."""
+
+    def __init__(self, response: httpx.Response) -> None:
+        super().__init__(response, decode_messages(iter_sse(response.iter_lines())))
+
     def __enter__(self) -> "PlanEvents":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+class MissionEvents(_EventStream[MissionView]):
+    """An open ``GET /v1/missions/{id}/events`` stream: iterate it for :class:`MissionView` s (first the
+    current one, then one per change); close it (or use it as a context manager) to hang up. Iteration ends
+    when the daemon ends the stream (after ``done``, ``failed`` or ``cancelled``, or on shutdown). Close it
+    from the thread that iterates, as :class:`PlanEvents`."""
+
+    def __init__(self, response: httpx.Response) -> None:
+        super().__init__(response, decode_mission_messages(iter_sse(response.iter_lines())))
+
+    def __enter__(self) -> "MissionEvents":
         return self
 
     def __exit__(self, *exc: object) -> None:
@@ -215,10 +244,13 @@ class Client:
     def plan_events(self, plan_id: str) -> PlanEvents:
         """``GET /v1/plans/{id}/events``: an open stream of typed events (first the current status). Raises
         :class:`ShiftError` at once for an unknown plan."""
+        return PlanEvents(self._open_stream(f"/v1/plans/{_seg(plan_id)}/events"))
+
+    def _open_stream(self, path: str) -> httpx.Response:
+        """``GET path`` as an event stream without a read timeout; raises :class:`ShiftError` for an error
+        answer."""
         timeout = httpx.Timeout(self._http.timeout.connect, read=None, write=self._http.timeout.write, pool=None)
-        req = self._http.build_request(
-            "GET", f"/v1/plans/{_seg(plan_id)}/events", headers={"Accept": "text/event-stream"}, timeout=timeout
-        )
+        req = self._http.build_request("GET", path, headers={"Accept": "text/event-stream"}, timeout=timeout)
         r = self._http.send(req, stream=True)
         if not 200 <= r.status_code < 300:
             try:
@@ -226,7 +258,63 @@ class Client:
             finally:
                 r.close()
             raise ShiftError.from_response(r.status_code, body, r.headers)
-        return PlanEvents(r)
+        return r
+
+    # --- missions ---------------------------------------------------------------------------------------------
+
+    def create_mission(self, request: MissionRequest) -> MissionAccepted:
+        """``POST /v1/missions``: the mission is queued (202): its site is divided among the robots and each part
+        planned as an ordinary plan. The whole request is checked first: a 400 names the field (``robots[1].id
+        …``) and nothing is stored; an unknown site is 404, a full queue 429. Follow it with
+        :meth:`mission_events`."""
+        return MissionAccepted.from_json(self._request("POST", "/v1/missions", json=request.to_json()))
+
+    def get_mission(self, mission_id: str) -> MissionView:
+        """``GET /v1/missions/{id}``: status, one plan per robot, planned and measured coverage, progress, ETA."""
+        return MissionView.from_json(self._request("GET", f"/v1/missions/{_seg(mission_id)}"))
+
+    def assign_mission(self, mission_id: str) -> MissionView:
+        """``POST /v1/missions/{id}/assign``: every part's plan to its robot, all or none (409 while a plan is
+        not computed). Returns the mission, now ``active``."""
+        return MissionView.from_json(self._request("POST", f"/v1/missions/{_seg(mission_id)}/assign", json={}))
+
+    def replan_mission(self, mission_id: str) -> MissionView:
+        """``POST /v1/missions/{id}/replan``: what the mission has left (its swept cells left out) is divided
+        again among its robots that are not lost, each from where it is; each plan then gets its next version.
+        Answers at once (202) with the mission's view. 409 before it is planned and once done or cancelled."""
+        return MissionView.from_json(self._request("POST", f"/v1/missions/{_seg(mission_id)}/replan", json={}))
+
+    def cancel_mission(self, mission_id: str) -> MissionView:
+        """``DELETE /v1/missions/{id}``: cancels the mission and its plans not yet driven (a robot driving its
+        part finishes it); 409 once it is done, failed or cancelled."""
+        return MissionView.from_json(self._request("DELETE", f"/v1/missions/{_seg(mission_id)}"))
+
+    def mission_events(self, mission_id: str) -> MissionEvents:
+        """``GET /v1/missions/{id}/events``: an open stream of :class:`MissionView` s, the current one first.
+        Raises :class:`ShiftError` at once for an unknown mission.
+
+        >>> with api.mission_events(accepted.mission_id) as views:           # doctest: +SKIP
+        ...     for view in views:
+        ...         if view.status not in ("queued", "planning"):
+        ...             break
+        """
+        return MissionEvents(self._open_stream(f"/v1/missions/{_seg(mission_id)}/events"))
+
+    def site_coverage(self, site: str) -> OccupancyGrid:
+        """``GET /v1/sites/{site}/coverage``: what robots' tools swept on the site over its map, one value per
+        cell: 100 swept, 0 free and not swept, -1 not free."""
+        return OccupancyGrid.from_json(self._request("GET", f"/v1/sites/{_seg(site)}/coverage"))
+
+    def site_coverage_png(self, site: str) -> bytes:
+        """``GET /v1/sites/{site}/coverage?format=png``: the same raster as PNG bytes (the map in greys, swept
+        cells green, one pixel per cell, the map's top row first)."""
+        r = self._http.get(
+            f"/v1/sites/{_seg(site)}/coverage", params={"format": "png"}, headers={"Accept": "image/png"}
+        )
+        err = error_for(r.status_code, r.content, r.headers)
+        if err is not None:
+            raise err
+        return r.content
 
     # --- robots -----------------------------------------------------------------------------------------------
 

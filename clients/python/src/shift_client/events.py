@@ -1,9 +1,14 @@
-"""Plan events of ``GET /v1/plans/{id}/events`` (Server-Sent Events, ``PlanEvent`` in ``proto/src/api.rs``) and
-the SSE line parser that reads them.
+"""Plan events of ``GET /v1/plans/{id}/events`` (Server-Sent Events, ``PlanEvent`` in ``proto/src/api.rs``), the
+mission views of ``GET /v1/missions/{id}/events`` (``mission`` events, ``MissionView`` in
+``proto/src/mission.rs``), and the SSE line parser that reads them.
 
 Every event's data is JSON tagged by ``type``: ``status``, ``progress``, ``region-ready``, ``correction``. The
 first event of a stream is the plan's current status; the daemon ends the stream after a ``done``, ``failed`` or
 ``cancelled`` status (a ``ready`` plan's stream stays open: corrections follow once it is assigned).
+
+A mission's stream carries its whole view as each ``mission`` event: first the current one, then one on every
+change (about once a second at most while only progress and measured coverage move); it ends after ``done``,
+``failed`` or ``cancelled``.
 """
 
 from __future__ import annotations
@@ -12,7 +17,7 @@ import json
 from dataclasses import dataclass
 from typing import Any, Dict, Iterable, Iterator, List, Mapping, Optional, Union
 
-from .types import Correction, PlanInfo, Point2, _points
+from .types import Correction, MissionView, PlanInfo, Point2, _points
 
 
 @dataclass(frozen=True)
@@ -116,3 +121,11 @@ def decode_messages(messages: Iterable[SseMessage]) -> Iterator[PlanEvent]:
     for m in messages:
         data: Dict[str, Any] = json.loads(m.data)
         yield parse_event(m.event, data)
+
+
+def decode_mission_messages(messages: Iterable[SseMessage]) -> Iterator[MissionView]:
+    """Mission views of SSE messages: the data of each ``mission`` event; events of other names (a newer
+    daemon's) are skipped."""
+    for m in messages:
+        if m.event == "mission":
+            yield MissionView.from_json(json.loads(m.data))

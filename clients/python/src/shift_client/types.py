@@ -1,6 +1,7 @@
 """Typed forms of SHIFT's wire documents (DESIGN §5.1, §5.3, §5.4).
 
-The contract is the Rust crate ``shift-proto`` (``proto/src/plan.rs``, ``api.rs``, ``correction.rs``); these
+The contract is the Rust crate ``shift-proto`` (``proto/src/plan.rs``, ``api.rs``, ``correction.rs``,
+``mission.rs``, ``listing.rs``); these
 dataclasses mirror its field names. Parsing ignores fields it does not know, so a newer daemon that adds
 optional fields keeps working. Positions are metres in the map frame, speeds m/s, accelerations m/s², times
 seconds from the plan's start unless a name says otherwise (``*_ms``: milliseconds since the Unix epoch).
@@ -21,6 +22,13 @@ FINAL_STATUSES: Tuple[str, ...] = ("ready", "active", "done", "failed", "cancell
 
 STREAM_END_STATUSES: Tuple[str, ...] = ("done", "failed", "cancelled")
 """Statuses after which the daemon ends a plan's event stream."""
+
+MissionStatus = Literal["queued", "planning", "ready", "active", "done", "failed", "cancelled"]
+"""Lifecycle of a mission."""
+
+MISSION_SETTLED_STATUSES: Tuple[str, ...] = ("done", "failed", "cancelled")
+"""Statuses after which nothing changes a mission any more (``MissionStatus::is_settled``); its event stream
+ends after one."""
 
 
 def _points(raw: Optional[Sequence[Sequence[float]]]) -> List[Point2]:
@@ -312,9 +320,7 @@ class PlanRequest:
             "robot": self.robot.to_json(),
         }
         if self.attribute is not None:
-            out["attribute"] = {
-                "blobs": [{"x": b.x, "y": b.y, "sigma": b.sigma, "amplitude": b.amplitude} for b in self.attribute]
-            }
+            out["attribute"] = _blobs_json(self.attribute)
         if self.region is not None:
             out["region"] = [[float(x), float(y)] for x, y in self.region]
         if self.options is not None:
@@ -371,6 +377,8 @@ class PlanInfo:
     watch: Optional[str] = None
     """``watching``, ``blind`` or ``blocked`` (the path is blocked to its end; the plan waits) while a robot drives it."""
     progress_jumps: List[ProgressJump] = field(default_factory=list)
+    mission: Optional[str] = None
+    """The mission this plan is a part of (``/v1/missions/{id}``)."""
 
     @classmethod
     def from_json(cls, d: Mapping[str, Any]) -> "PlanInfo":
@@ -393,6 +401,7 @@ class PlanInfo:
             corrections=int(d.get("corrections", 0)),
             watch=d.get("watch"),
             progress_jumps=[ProgressJump.from_json(j) for j in d.get("progress_jumps", [])],
+            mission=d.get("mission"),
         )
 
     @property
@@ -479,6 +488,24 @@ class OccupancyGrid:
         if len(self.cells) != self.width * self.height:
             raise ValueError(f"{len(self.cells)} cells for a {self.width} × {self.height} grid")
 
+    @classmethod
+    def from_json(cls, d: Mapping[str, Any]) -> "OccupancyGrid":
+        """A grid the daemon serves (``GET /v1/sites/{site}/map``, ``…/coverage``)."""
+        origin = d.get("origin", [0.0, 0.0])
+        return cls(
+            resolution=float(d["resolution"]),
+            origin=(float(origin[0]), float(origin[1])),
+            width=int(d["width"]),
+            height=int(d["height"]),
+            cells=[int(c) for c in d["cells"]],
+        )
+
+    def cell(self, column: int, row: int) -> Optional[int]:
+        """The value of cell (``column``, ``row``) (row 0 at the origin), ``None`` outside the grid."""
+        if not (0 <= column < self.width and 0 <= row < self.height):
+            return None
+        return self.cells[row * self.width + column]
+
     def to_json(self) -> Dict[str, Any]:
         return {
             "resolution": self.resolution,
@@ -487,6 +514,194 @@ class OccupancyGrid:
             "height": self.height,
             "cells": list(self.cells),
         }
+
+
+def _blobs_json(blobs: List[AttributeBlob]) -> Dict[str, Any]:
+    return {"blobs": [{"x": b.x, "y": b.y, "sigma": b.sigma, "amplitude": b.amplitude} for b in blobs]}
+
+
+def _blobs(raw: Optional[Mapping[str, Any]]) -> Optional[List[AttributeBlob]]:
+    if raw is None:
+        return None
+    return [
+        AttributeBlob(float(b["x"]), float(b["y"]), float(b["sigma"]), float(b["amplitude"]))
+        for b in raw.get("blobs", [])
+    ]
+
+
+@dataclass(frozen=True)
+class MissionRobot:
+    """One robot of ``POST /v1/missions``: its ``id`` (as in its Zenoh keys), its dock ``start`` ``(x, y)`` (m,
+    map frame; where it starts and returns), footprint radius and tool width (m), speed limits (m/s),
+    acceleration (m/s²)."""
+
+    id: str
+    start: Point2
+    radius: float
+    tool_width: float
+    v_min: float = 0.1
+    v_max: float = 1.0
+    a_max: float = 0.5
+
+    @classmethod
+    def from_json(cls, d: Mapping[str, Any]) -> "MissionRobot":
+        start = d["start"]
+        return cls(
+            id=str(d["id"]),
+            start=(float(start[0]), float(start[1])),
+            radius=float(d["radius"]),
+            tool_width=float(d["tool_width"]),
+            v_min=float(d.get("v_min", 0.1)),
+            v_max=float(d.get("v_max", 1.0)),
+            a_max=float(d.get("a_max", 0.5)),
+        )
+
+    def to_json(self) -> Dict[str, Any]:
+        return {
+            "id": self.id,
+            "start": [float(self.start[0]), float(self.start[1])],
+            "radius": self.radius,
+            "tool_width": self.tool_width,
+            "v_min": self.v_min,
+            "v_max": self.v_max,
+            "a_max": self.a_max,
+        }
+
+
+@dataclass(frozen=True)
+class MissionRequest:
+    """``POST /v1/missions``: one site covered by a fleet (at least one robot, ids unique, at most 64). The site
+    is divided among the robots and each part planned; ``attribute`` (blobs, one map for the whole fleet),
+    ``options`` and ``objective`` (``time``, ``length``, ``overlap``, ``turns``) apply to every part."""
+
+    site: str
+    robots: List[MissionRobot]
+    attribute: Optional[List[AttributeBlob]] = None
+    options: Optional[PlanOptions] = None
+    objective: Optional[str] = None
+
+    MAX_ROBOTS = 64
+    """Most robots one mission may hold."""
+
+    @classmethod
+    def from_json(cls, d: Mapping[str, Any]) -> "MissionRequest":
+        o = d.get("options")
+        return cls(
+            site=str(d["site"]),
+            robots=[MissionRobot.from_json(r) for r in d.get("robots", [])],
+            attribute=_blobs(d.get("attribute")),
+            options=None
+            if o is None
+            else PlanOptions(o.get("decomposition"), o.get("order"), o.get("pattern"), o.get("seed")),
+            objective=d.get("objective"),
+        )
+
+    def to_json(self) -> Dict[str, Any]:
+        out: Dict[str, Any] = {"site": self.site, "robots": [r.to_json() for r in self.robots]}
+        if self.attribute is not None:
+            out["attribute"] = _blobs_json(self.attribute)
+        if self.options is not None:
+            out["options"] = self.options.to_json()
+        if self.objective is not None:
+            out["objective"] = self.objective
+        return out
+
+
+@dataclass(frozen=True)
+class MissionAccepted:
+    """The 202 answer to ``POST /v1/missions``."""
+
+    mission_id: str
+    status: str
+
+    @classmethod
+    def from_json(cls, d: Mapping[str, Any]) -> "MissionAccepted":
+        return cls(mission_id=str(d["mission_id"]), status=str(d["status"]))
+
+
+@dataclass(frozen=True)
+class MissionPlanView:
+    """One robot's plan within a mission: an ordinary plan (``/v1/plans/{plan_id}``), its status and version (0
+    until planned), planned duration (s) and area of its part (m²) once known, fraction of its path driven."""
+
+    robot: str
+    plan_id: str
+    status: str
+    version: int
+    driven_fraction: float
+    planned_duration_s: Optional[float] = None
+    area_m2: Optional[float] = None
+
+    @classmethod
+    def from_json(cls, d: Mapping[str, Any]) -> "MissionPlanView":
+        return cls(
+            robot=str(d["robot"]),
+            plan_id=str(d["plan_id"]),
+            status=str(d["status"]),
+            version=int(d.get("version", 0)),
+            driven_fraction=float(d.get("driven_fraction", 0.0)),
+            planned_duration_s=_opt_float(d.get("planned_duration_s")),
+            area_m2=_opt_float(d.get("area_m2")),
+        )
+
+
+@dataclass(frozen=True)
+class MissionCoverage:
+    """Planned and measured coverage of a mission, percent of its site's coverable area: ``planned_pct`` by the
+    union of the planned paths (once planned), ``measured_pct`` swept by the robots' tools since the plans were
+    assigned, ``seam_pct`` planned by two robots or more."""
+
+    measured_pct: float = 0.0
+    planned_pct: Optional[float] = None
+    seam_pct: Optional[float] = None
+
+    @classmethod
+    def from_json(cls, d: Mapping[str, Any]) -> "MissionCoverage":
+        return cls(
+            measured_pct=float(d.get("measured_pct", 0.0)),
+            planned_pct=_opt_float(d.get("planned_pct")),
+            seam_pct=_opt_float(d.get("seam_pct")),
+        )
+
+
+@dataclass(frozen=True)
+class MissionView:
+    """``GET /v1/missions/{id}`` (and each ``mission`` event of its stream): status, ``progress`` 0-1 (of the
+    planning while planning, then of the planned work driven), one plan per robot in the request's order,
+    coverage, ``eta_s`` (planned time left of the last robot to finish) once planned."""
+
+    mission_id: str
+    site: str
+    status: str
+    progress: float
+    plans: List[MissionPlanView]
+    coverage: MissionCoverage
+    created_ms: int
+    updated_ms: int
+    eta_s: Optional[float] = None
+    error: Optional[str] = None
+    warnings: List[str] = field(default_factory=list)
+
+    @classmethod
+    def from_json(cls, d: Mapping[str, Any]) -> "MissionView":
+        return cls(
+            mission_id=str(d["mission_id"]),
+            site=str(d["site"]),
+            status=str(d["status"]),
+            progress=float(d.get("progress", 0.0)),
+            plans=[MissionPlanView.from_json(p) for p in d.get("plans", [])],
+            coverage=MissionCoverage.from_json(d.get("coverage") or {}),
+            created_ms=int(d.get("created_ms", 0)),
+            updated_ms=int(d.get("updated_ms", 0)),
+            eta_s=_opt_float(d.get("eta_s")),
+            error=d.get("error"),
+            warnings=[str(w) for w in d.get("warnings", [])],
+        )
+
+    @property
+    def is_settled(self) -> bool:
+        """True when nothing will change the mission any more (done, failed, cancelled)."""
+        return self.status in MISSION_SETTLED_STATUSES
 
 
 @dataclass(frozen=True)

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use shift_client::DEFAULT_BASE_URL;
 
-/// Operate a SHIFT daemon: sites, plans, exports, pictures, robots.
+/// Operate a SHIFT daemon: sites, plans, missions, exports, pictures, robots.
 ///
 /// Exit codes: 0 ok, 1 the server said no (or could not be reached), 2 bad input (arguments, local files).
 #[derive(Debug, Parser)]
@@ -46,6 +46,15 @@ pub enum Command {
     Export(ExportArgs),
     /// Draw a plan on its site's map as a PNG.
     Render(RenderArgs),
+    /// A mission for a fleet: `mission create --site S --robot ID:X,Y:RADIUS:TOOL_WIDTH …`, or
+    /// `mission show|assign|replan|cancel ID`.
+    Mission {
+        /// What to do.
+        #[command(subcommand)]
+        action: MissionAction,
+    },
+    /// What robots swept on a site (`--png FILE` for the picture).
+    Coverage(CoverageArgs),
     /// Every robot: alive or lost, pose, plan, progress.
     Robots,
     /// Follow a Zenoh stream.
@@ -105,6 +114,20 @@ pub struct PlanArgs {
     /// Only cover inside this polygon: "X,Y X,Y X,Y …" (metres, map frame).
     #[arg(long, value_name = "POLYGON", allow_hyphen_values = true)]
     pub region: Option<String>,
+    // Attribute map, planner options, objective.
+    #[command(flatten)]
+    pub planner: PlannerArgs,
+    /// Move a start whose traversable piece is small into the largest piece when it is this close, metres.
+    #[arg(long, value_name = "M")]
+    pub snap_start_m: Option<f64>,
+    /// Follow the computation: a progress bar fed by the plan's events, then the metrics.
+    #[arg(long)]
+    pub watch: bool,
+}
+
+/// The planner's choices, shared by `plan` and `mission create`.
+#[derive(Debug, Args)]
+pub struct PlannerArgs {
     /// Attribute map: a JSON file `{"blobs": [{"x", "y", "sigma", "amplitude"}]}`.
     #[arg(long, value_name = "FILE")]
     pub attribute: Option<PathBuf>,
@@ -120,15 +143,9 @@ pub struct PlanArgs {
     /// Seed for every random choice.
     #[arg(long)]
     pub seed: Option<u64>,
-    /// What the plan minimises among those that cover ≥ 99 % (time, length, overlap, turns; default time).
+    /// What a plan minimises among those that cover ≥ 99 % (time, length, overlap, turns; default time).
     #[arg(long)]
     pub objective: Option<String>,
-    /// Move a start whose traversable piece is small into the largest piece when it is this close, metres.
-    #[arg(long, value_name = "M")]
-    pub snap_start_m: Option<f64>,
-    /// Follow the computation: a progress bar fed by the plan's events, then the metrics.
-    #[arg(long)]
-    pub watch: bool,
 }
 
 /// `plan show|cancel|assign`.
@@ -151,6 +168,65 @@ pub enum PlanAction {
         /// Robot id.
         robot: String,
     },
+}
+
+/// `mission …`.
+#[derive(Debug, Subcommand)]
+pub enum MissionAction {
+    /// Ask for a mission: the site divided among the robots, each part planned.
+    Create(MissionCreateArgs),
+    /// Status, coverage and one plan per robot.
+    Show {
+        /// Mission id.
+        id: String,
+    },
+    /// Send every part's plan to its robot (all or none).
+    Assign {
+        /// Mission id.
+        id: String,
+    },
+    /// Divide what the mission has left again among its robots, each from where it is.
+    Replan {
+        /// Mission id.
+        id: String,
+    },
+    /// Cancel a mission and its plans not yet driven.
+    Cancel {
+        /// Mission id.
+        id: String,
+    },
+}
+
+/// `mission create`.
+#[derive(Debug, Args)]
+pub struct MissionCreateArgs {
+    /// Site to cover.
+    #[arg(long)]
+    pub site: String,
+    /// A robot: its id, dock X,Y (metres, map frame), footprint radius and tool width (metres); once per robot.
+    #[arg(
+        long = "robot",
+        required = true,
+        value_name = "ID:X,Y:RADIUS:TOOL_WIDTH",
+        allow_hyphen_values = true
+    )]
+    pub robots: Vec<String>,
+    // Attribute map, planner options, objective.
+    #[command(flatten)]
+    pub planner: PlannerArgs,
+    /// Follow the planning: a progress bar fed by the mission's events, then its table.
+    #[arg(long)]
+    pub watch: bool,
+}
+
+/// `coverage`.
+#[derive(Debug, Args)]
+pub struct CoverageArgs {
+    /// Site name.
+    pub site: String,
+    /// Write the raster as a PNG here (the map in greys, swept cells green) instead of printing its figures.
+    #[arg(long, value_name = "FILE")]
+    pub png: Option<PathBuf>,
 }
 
 /// `plans`.

@@ -4,10 +4,10 @@ use std::path::Path;
 
 use anyhow::Context as _;
 use shift_client::Client;
-use shift_client::proto::{AttributeDoc, PlanListQuery, PlanObjective, PlanOptions, PlanRequest, RobotSpec};
+use shift_client::proto::{PlanListQuery, PlanRequest, RobotSpec};
 
 use crate::cli::{PlanAction, PlanArgs, PlansArgs, SiteAction};
-use crate::input::{bad, point, polygon, status};
+use crate::input::{bad, planner, point, polygon, positive, status};
 use crate::{show, watch};
 
 /// `site upload|show`.
@@ -78,17 +78,6 @@ fn request(args: &PlanArgs) -> anyhow::Result<PlanRequest> {
         args.start.as_deref().ok_or_else(|| bad("--start is required"))?,
     )?;
     let region = args.region.as_deref().map(|r| polygon("--region", r)).transpose()?;
-    let attribute = match &args.attribute {
-        None => None,
-        Some(path) => {
-            let text =
-                std::fs::read_to_string(path).map_err(|e| bad(format!("--attribute {}: {e}", path.display())))?;
-            Some(
-                serde_json::from_str::<AttributeDoc>(&text)
-                    .map_err(|e| bad(format!("--attribute {}: {e}", path.display())))?,
-            )
-        }
-    };
     for (name, v) in [
         ("--robot-radius", args.robot_radius),
         ("--tool-width", args.tool_width),
@@ -96,16 +85,9 @@ fn request(args: &PlanArgs) -> anyhow::Result<PlanRequest> {
         ("--v-max", args.v_max),
         ("--a-max", args.a_max),
     ] {
-        if !(v.is_finite() && v > 0.0) {
-            return Err(bad(format!("{name}: {v} is not a positive number")));
-        }
+        positive(name, v)?;
     }
-    let options = PlanOptions {
-        decomposition: args.decomposition.clone(),
-        order: args.order.clone(),
-        pattern: args.pattern.clone(),
-        seed: args.seed,
-    };
+    let (attribute, options, objective) = planner(&args.planner)?;
     Ok(PlanRequest {
         site,
         start,
@@ -118,17 +100,8 @@ fn request(args: &PlanArgs) -> anyhow::Result<PlanRequest> {
         },
         attribute,
         region,
-        options: (options != PlanOptions::default()).then_some(options),
-        objective: match &args.objective {
-            None => None,
-            Some(name) => Some(
-                serde_json::from_value::<PlanObjective>(serde_json::Value::String(name.clone())).map_err(|_| {
-                    bad(format!(
-                        "--objective {name}: expected one of time, length, overlap, turns"
-                    ))
-                })?,
-            ),
-        },
+        options,
+        objective,
         snap_start_m: args.snap_start_m,
     })
 }

@@ -1,6 +1,11 @@
-//! Reading what the user typed: points, polygons, statuses; and the error that means "bad input" (exit 2).
+//! Reading what the user typed: points, polygons, statuses, robots, planner choices; and the error that means
+//! "bad input" (exit 2).
 
-use shift_client::proto::PlanStatus;
+use std::path::Path;
+
+use shift_client::proto::{AttributeDoc, MissionRobot, PlanObjective, PlanOptions, PlanStatus};
+
+use crate::cli::PlannerArgs;
 
 /// The user's input is wrong (exit code 2).
 #[derive(Debug)]
@@ -55,6 +60,74 @@ pub fn status(text: &str) -> anyhow::Result<PlanStatus> {
     })
 }
 
+/// A finite number above zero.
+pub fn positive(what: &str, v: f64) -> anyhow::Result<f64> {
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(bad(format!("{what}: {v} is not a positive number")))
+    }
+}
+
+/// `ID:X,Y:RADIUS:TOOL_WIDTH` → a mission robot with the API's default speed limits.
+pub fn robot(what: &str, text: &str) -> anyhow::Result<MissionRobot> {
+    let parts: Vec<&str> = text.split(':').collect();
+    let [id, start, radius, tool_width] = parts[..] else {
+        return Err(bad(format!("{what}: {text:?} is not ID:X,Y:RADIUS:TOOL_WIDTH")));
+    };
+    let id = id.trim();
+    if id.is_empty() {
+        return Err(bad(format!("{what}: {text:?} has no robot id")));
+    }
+    let number = |name: &str, s: &str| {
+        let v = s
+            .trim()
+            .parse::<f64>()
+            .map_err(|_| bad(format!("{what} {id}: {name} {s:?} is not a number")))?;
+        positive(&format!("{what} {id}: {name}"), v)
+    };
+    Ok(MissionRobot::new(
+        id,
+        point(&format!("{what} {id}"), start)?,
+        number("radius", radius)?,
+        number("tool width", tool_width)?,
+    ))
+}
+
+/// The attribute map in a JSON file.
+pub fn attribute(path: &Path) -> anyhow::Result<AttributeDoc> {
+    let text = std::fs::read_to_string(path).map_err(|e| bad(format!("--attribute {}: {e}", path.display())))?;
+    serde_json::from_str::<AttributeDoc>(&text).map_err(|e| bad(format!("--attribute {}: {e}", path.display())))
+}
+
+/// The attribute map, planner options (none when all are left to the daemon) and objective asked for.
+pub fn planner(
+    args: &PlannerArgs,
+) -> anyhow::Result<(Option<AttributeDoc>, Option<PlanOptions>, Option<PlanObjective>)> {
+    let attribute = args.attribute.as_deref().map(attribute).transpose()?;
+    let options = PlanOptions {
+        decomposition: args.decomposition.clone(),
+        order: args.order.clone(),
+        pattern: args.pattern.clone(),
+        seed: args.seed,
+    };
+    let objective = match &args.objective {
+        None => None,
+        Some(name) => Some(
+            serde_json::from_value::<PlanObjective>(serde_json::Value::String(name.clone())).map_err(|_| {
+                bad(format!(
+                    "--objective {name}: expected one of time, length, overlap, turns"
+                ))
+            })?,
+        ),
+    };
+    Ok((
+        attribute,
+        (options != PlanOptions::default()).then_some(options),
+        objective,
+    ))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -69,5 +142,21 @@ mod tests {
         assert!(polygon("--region", "0,0 4,0").is_err());
         assert!(status("ready").is_ok());
         assert!(status("busy").is_err());
+    }
+
+    #[test]
+    fn robots() {
+        let r = robot("--robot", "r1:-1.5,2:0.25:0.5").expect("parses");
+        assert_eq!(r, MissionRobot::new("r1", [-1.5, 2.0], 0.25, 0.5));
+        for text in [
+            "r1:1,2:0.25",
+            "r1:1,2:0.25:0.5:9",
+            ":1,2:0.25:0.5",
+            "r1:1:0.25:0.5",
+            "r1:1,2:-1:0.5",
+            "r1:1,2:0.2:w",
+        ] {
+            assert!(robot("--robot", text).is_err(), "{text}");
+        }
     }
 }

@@ -5,6 +5,7 @@ mod cli;
 mod commands;
 mod export;
 mod input;
+mod missions;
 mod render;
 mod show;
 mod tail;
@@ -54,6 +55,8 @@ async fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Plans(args) => commands::plans(&client, args, json).await,
         Command::Export(args) => export::run(&client, args).await,
         Command::Render(args) => render::run(&client, args, json).await,
+        Command::Mission { action } => missions::mission(&client, action, json).await,
+        Command::Coverage(args) => missions::coverage(&client, args, json).await,
         Command::Robots => commands::robots(&client, json).await,
         Command::Tail { stream } => tail::run(stream, json).await,
     }

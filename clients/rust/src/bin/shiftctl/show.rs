@@ -1,9 +1,10 @@
-//! Human output: aligned tables and the blocks `plan show`, `site show` and `plan --watch` print.
+//! Human output: aligned tables and the blocks `plan show`, `site show`, `mission show`, `coverage` and the
+//! `--watch` followers print.
 
 use std::fmt::Write as _;
 
 use serde::Serialize;
-use shift_client::proto::{PlanMetricsDoc, PlanStatusResponse, RobotView, SiteSummary};
+use shift_client::proto::{MissionView, OccupancyGridDoc, PlanMetricsDoc, PlanStatusResponse, RobotView, SiteSummary};
 
 /// Prints `value` as JSON on stdout.
 pub fn json<T: Serialize>(value: &T) -> anyhow::Result<()> {
@@ -99,6 +100,84 @@ pub fn plan(s: &PlanStatusResponse) -> String {
         out.push_str(&metrics(m));
     }
     out
+}
+
+/// `mission show` (and what `mission assign|cancel` and `mission create --watch` answer): the mission's
+/// figures, then one row per robot's plan.
+pub fn mission(m: &MissionView) -> String {
+    let pct = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.1} %"));
+    let mut rows = vec![
+        ("mission", m.mission_id.clone()),
+        ("site", m.site.clone()),
+        ("status", m.status.as_str().to_owned()),
+        ("progress", format!("{:.0} %", m.progress * 100.0)),
+        ("planned", pct(m.coverage.planned_pct)),
+        ("seams", pct(m.coverage.seam_pct)),
+        ("measured", format!("{:.1} %", m.coverage.measured_pct)),
+    ];
+    if let Some(eta) = m.eta_s {
+        rows.push(("eta", format!("{eta:.0} s")));
+    }
+    rows.push(("updated", ago_ms(m.updated_ms)));
+    if let Some(e) = &m.error {
+        rows.push(("error", e.clone()));
+    }
+    for w in &m.warnings {
+        rows.push(("warning", w.clone()));
+    }
+    let plans: Vec<Vec<String>> = m
+        .plans
+        .iter()
+        .map(|p| {
+            vec![
+                p.robot.clone(),
+                p.plan_id.clone(),
+                p.status.as_str().to_owned(),
+                p.version.to_string(),
+                p.area_m2.map_or("-".into(), |a| format!("{a:.1}")),
+                p.planned_duration_s.map_or("-".into(), |t| format!("{t:.0}")),
+                format!("{:.0}%", p.driven_fraction * 100.0),
+            ]
+        })
+        .collect();
+    let mut out = pairs(&rows);
+    out.push('\n');
+    out.push_str(&table(
+        &["ROBOT", "PLAN", "STATUS", "VERSION", "AREA_M2", "TIME_S", "DRIVEN"],
+        &plans,
+    ));
+    out
+}
+
+/// `coverage SITE`: the raster's size and what share of the free cells was swept.
+pub fn coverage(site: &str, g: &OccupancyGridDoc) -> String {
+    let swept = g.cells.iter().filter(|&&c| c == 100).count();
+    let unswept = g.cells.iter().filter(|&&c| c == 0).count();
+    let share = if swept + unswept == 0 {
+        0.0
+    } else {
+        100.0 * swept as f64 / (swept + unswept) as f64
+    };
+    let cell_m2 = g.resolution * g.resolution;
+    pairs(&[
+        ("site", site.to_owned()),
+        (
+            "size",
+            format!(
+                "{} × {} cells ({:.1} m × {:.1} m)",
+                g.width,
+                g.height,
+                g.width as f64 * g.resolution,
+                g.height as f64 * g.resolution
+            ),
+        ),
+        ("swept", format!("{swept} cells ({:.1} m²)", swept as f64 * cell_m2)),
+        (
+            "not swept",
+            format!("{unswept} free cells ({:.1} m²)", unswept as f64 * cell_m2),
+        ),
+        ("swept share", format!("{share:.1} %")),
+    ])
 }
 
 /// `site show`.

@@ -1,9 +1,10 @@
-//! `plan … --watch`: follows the plan's server-sent events — a progress bar (regions counted as they stream)
-//! for people, one JSON event per line for scripts — then prints the final status with its metrics.
+//! `plan … --watch` and `mission create … --watch`: follow the server-sent events — a progress bar for people
+//! (a plan's regions counted as they stream; a mission's status and planned coverage), one JSON document per
+//! line for scripts — then print the final status: a plan's metrics, a mission's table.
 
 use indicatif::{ProgressBar, ProgressStyle};
 use shift_client::Client;
-use shift_client::proto::{PlanEvent, PlanStatus, PlanStatusResponse};
+use shift_client::proto::{MissionStatus, MissionView, PlanEvent, PlanStatus, PlanStatusResponse};
 
 use crate::show;
 
@@ -13,18 +14,7 @@ const STEPS: u64 = 1000;
 /// Follows `plan_id` until its computation ended; an error when it failed or was cancelled.
 pub async fn follow(client: &Client, plan_id: &str, json: bool) -> anyhow::Result<()> {
     let mut events = client.events(plan_id).await?;
-    let bar = if json {
-        ProgressBar::hidden()
-    } else {
-        let bar = ProgressBar::new(STEPS);
-        let style = ProgressStyle::with_template("{spinner} {prefix} [{bar:40}] {percent:>3}% {msg} ({elapsed})")
-            .map(|s| s.progress_chars("=> "))
-            .unwrap_or_else(|_| ProgressStyle::default_bar());
-        bar.set_style(style);
-        bar.set_prefix(plan_id.to_owned());
-        bar.enable_steady_tick(std::time::Duration::from_millis(120));
-        bar
-    };
+    let bar = bar(plan_id, json);
     let mut regions = 0u32;
     let mut last: Option<PlanStatusResponse> = None;
     while let Some(event) = events.next_event().await? {
@@ -81,6 +71,69 @@ pub async fn follow(client: &Client, plan_id: &str, json: bool) -> anyhow::Resul
             s.as_str()
         ),
     }
+}
+
+/// Follows mission `mission_id` until it is planned (ready, or later), then prints its table; an error when
+/// it failed or was cancelled.
+pub async fn follow_mission(client: &Client, mission_id: &str, json: bool) -> anyhow::Result<()> {
+    let mut views = client.mission_events(mission_id).await?;
+    let bar = bar(mission_id, json);
+    let mut last: Option<MissionView> = None;
+    while let Some(view) = views.next_view().await? {
+        if json {
+            println!("{}", serde_json::to_string(&view)?);
+        }
+        bar.set_position(position(view.progress));
+        let planned = view.plans.iter().filter(|p| p.version > 0).count();
+        bar.set_message(format!(
+            "{}, {planned} of {} plans computed",
+            view.status.as_str(),
+            view.plans.len()
+        ));
+        let planning = matches!(view.status, MissionStatus::Queued | MissionStatus::Planning);
+        last = Some(view);
+        if !planning {
+            break;
+        }
+    }
+    bar.finish_and_clear();
+    let view = match last {
+        Some(v) if !matches!(v.status, MissionStatus::Queued | MissionStatus::Planning) => v,
+        // The stream ended early (daemon shutting down): ask once more.
+        _ => client.mission(mission_id).await?,
+    };
+    if !json {
+        print!("{}", show::mission(&view));
+    }
+    match view.status {
+        MissionStatus::Failed | MissionStatus::Cancelled => anyhow::bail!(
+            "mission {} {}: {}",
+            view.mission_id,
+            view.status.as_str(),
+            view.error.as_deref().unwrap_or("no reason given")
+        ),
+        MissionStatus::Queued | MissionStatus::Planning => anyhow::bail!(
+            "mission {} is still {} (the event stream ended)",
+            view.mission_id,
+            view.status.as_str()
+        ),
+        _ => Ok(()),
+    }
+}
+
+/// The progress bar for people; hidden for scripts.
+fn bar(prefix: &str, json: bool) -> ProgressBar {
+    if json {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(STEPS);
+    let style = ProgressStyle::with_template("{spinner} {prefix} [{bar:40}] {percent:>3}% {msg} ({elapsed})")
+        .map(|s| s.progress_chars("=> "))
+        .unwrap_or_else(|_| ProgressStyle::default_bar());
+    bar.set_style(style);
+    bar.set_prefix(prefix.to_owned());
+    bar.enable_steady_tick(std::time::Duration::from_millis(120));
+    bar
 }
 
 fn position(progress: f64) -> u64 {
