@@ -136,12 +136,17 @@ impl Engine {
             }
             let mut r = r.clone();
             let at_pose = self.robots.get(&r.id).and_then(|x| x.pose).map(|p| [p.x, p.y]);
+            // Without odometry since a restart, progress is still at the start: the record's driven fraction
+            // (committed with the plan) says where along the plan the robot was.
+            let fraction = self.plans.get(plan_id).map_or(0.0, |p| p.driven_fraction);
             let on_plan = self
                 .robots
                 .get(&r.id)
                 .and_then(|x| x.assignment.as_ref())
                 .and_then(|a| {
-                    let w = a.doc.waypoints.get(a.index)?;
+                    let total = a.arc_m.last().copied().unwrap_or(0.0);
+                    let at = a.arc_m.partition_point(|&s| s < fraction * total).max(a.index);
+                    let w = a.doc.waypoints.get(at.min(a.doc.waypoints.len().saturating_sub(1)))?;
                     Some([w.x, w.y])
                 });
             if let Some(p) = at_pose.or(on_plan).filter(|p| p[0].is_finite() && p[1].is_finite()) {
@@ -264,8 +269,9 @@ impl Engine {
         rec.updated_ms = now_ms;
         rec.warnings
             .push(format!("version {version} replans what was left ({reason})"));
-        let driven_by_it =
-            rec.robot.as_deref() == Some(robot) && matches!(rec.status, PlanStatus::Active | PlanStatus::Done);
+        // Assigned to it once (driving it, finished it, or its plan was cancelled when it was lost and it came
+        // back): the new version goes to it. A plan never assigned stays ready.
+        let driven_by_it = rec.robot.as_deref() == Some(robot);
         if driven_by_it {
             rec.status = PlanStatus::Active;
             rec.watch = Some(WatchHealth::Watching);

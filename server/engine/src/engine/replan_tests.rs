@@ -256,3 +256,79 @@ fn a_restart_with_a_mission_under_way_replans_it_and_a_mission_not_planned_canno
         Err(EngineError::MissionState { .. })
     ));
 }
+
+#[test]
+fn a_lost_robot_that_comes_back_takes_a_share_again() {
+    let (mut e, job) = planned();
+    let fleet = run_mission_job(&job).expect("plans");
+    let MissionOutcome::Planned { parts, .. } = planned_outcome(&job, &fleet, 5.0) else {
+        unreachable!()
+    };
+    alive(&mut e, "r1", true, 25);
+    alive(&mut e, "r2", true, 25);
+    let c = e
+        .handle(
+            Event::MissionAssignRequested {
+                mission_id: "m-1".into(),
+                docs: parts.iter().map(|p| p.doc.clone()).collect(),
+            },
+            30,
+        )
+        .expect("assigned");
+    let docs = delivered(&c);
+    let t = drive(
+        &mut e,
+        &[("r1", poses(&docs[0].1, 0.0, 0.2)), ("r2", poses(&docs[1].1, 0.0, 0.2))],
+        1_000,
+    );
+    let c = alive(&mut e, "r2", false, t + 10);
+    let job = mission_job(&c).expect("replan without r2");
+    let fleet = run_mission_job(&job).expect("replans");
+    e.handle(
+        Event::MissionFinished {
+            mission_id: "m-1".into(),
+            outcome: planned_outcome(&job, &fleet, 5.0),
+        },
+        t + 20,
+    )
+    .expect("replanned");
+    assert_eq!(e.plan("p-3").map(|r| r.status), Some(PlanStatus::Cancelled));
+    // r2 is back (its odometry, then its token): a replan for both, and r2 gets its plan's next version.
+    e.handle(
+        Event::RobotPose {
+            robot: "r2".into(),
+            pose: Pose2 {
+                x: 2.5,
+                y: 1.5,
+                yaw: 0.0,
+                stamp_ns: 0,
+            },
+        },
+        t + 30,
+    )
+    .expect("pose");
+    let c = alive(&mut e, "r2", true, t + 40);
+    let job = mission_job(&c).expect("replan with r2 back");
+    assert_eq!(job.plan_ids, vec!["p-2".to_string(), "p-3".to_string()]);
+    assert_eq!(job.request.robots[1].start, [2.5, 1.5]);
+    let fleet = run_mission_job(&job).expect("replans");
+    let c = e
+        .handle(
+            Event::MissionFinished {
+                mission_id: "m-1".into(),
+                outcome: planned_outcome(&job, &fleet, 5.0),
+            },
+            t + 50,
+        )
+        .expect("replanned");
+    let got: Vec<(String, String, u64)> = delivered(&c)
+        .into_iter()
+        .map(|(r, d)| (r, d.plan_id.clone(), d.version))
+        .collect();
+    assert_eq!(
+        got,
+        vec![("r1".into(), "p-2".into(), 3), ("r2".into(), "p-3".into(), 2)]
+    );
+    assert_eq!(e.plan("p-3").map(|r| r.status), Some(PlanStatus::Active));
+    assert_eq!(e.mission("m-1").map(|m| m.dropped.len()), Some(0));
+}
