@@ -435,3 +435,76 @@ async fn a_mission_is_followed_over_sse_and_cancelled_with_its_plans() -> Result
     server.stop().await?;
     Ok(())
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_recorded_mission_replays_to_the_same_division_and_replan() -> Result<()> {
+    let dir = tempfile::tempdir()?;
+    let (mut config, endpoint) = fleet_config(&dir.path().join("data"))?;
+    let record_dir = dir.path().join("rec");
+    config.record.dir = record_dir.clone();
+    config.demo.enabled = true;
+    let server = TestServer::start(config).await?;
+    let robot = |id: &str, start: [f64; 2]| json!({"id": id, "start": start, "radius": 0.15, "tool_width": 0.3});
+    let body = json!({"site": "demo", "robots": [robot("d1", [0.5, 0.5]), robot("d2", [7.5, 7.5])]});
+    let (code, accepted) = server.post("/v1/missions", &body).await?;
+    assert_eq!(code, 202, "{accepted}");
+    let id = accepted["mission_id"].as_str().context("mission_id")?.to_owned();
+    let path = format!("/v1/missions/{id}");
+    poll(
+        async || {
+            let (_, m) = server.get(&path).await?;
+            Ok((m["status"] == "ready").then_some(()))
+        },
+        "the mission to be planned",
+    )
+    .await?;
+    let (d1, d2) = (
+        ScriptedRobot::join(&endpoint, "d1").await?,
+        ScriptedRobot::join(&endpoint, "d2").await?,
+    );
+    wait_robot_alive(&server, "d1").await?;
+    wait_robot_alive(&server, "d2").await?;
+    assert_eq!(server.post(&format!("{path}/assign"), &json!({})).await?.0, 200);
+    let doc1 = d1.query_plan("d1", Duration::from_secs(10)).await?;
+    let doc2 = d2.query_plan("d2", Duration::from_secs(10)).await?;
+    for (r, name, doc) in [(&d1, "d1", &doc1), (&d2, "d2", &doc2)] {
+        for w in doc.waypoints.iter().take(doc.waypoints.len() / 3) {
+            r.odom(name, w.x, w.y, 0.0).await?;
+        }
+    }
+    // d2 leaves: its rest goes to d1, who gets version 2.
+    drop(d2);
+    poll(
+        async || {
+            let (_, m) = server.get(&path).await?;
+            Ok((m["plans"][0]["version"].as_u64() == Some(2)).then_some(()))
+        },
+        "d1's plan replanned after d2 left",
+    )
+    .await?;
+    drop(d1);
+    server.stop().await?;
+
+    // The recording replays through the engine to the same decisions: the division and the replan come back
+    // as the jobs' recorded outcomes, every decision around them is the engine's own again.
+    let files = shiftd::record::writer::recordings_in(&record_dir)?;
+    let rec = shiftd::replay::Recorded::read(&files)?;
+    let mut out = Vec::new();
+    let report = shiftd::replay::into_engine(&rec, &mut out, true)?;
+    assert!(report.mismatches.is_empty(), "{:#?}", report.mismatches);
+    let text = String::from_utf8(out)?;
+    for kind in [
+        "\"start_mission\"",
+        "\"store_mission\"",
+        "\"replace_plan\"",
+        "\"mission\"",
+    ] {
+        assert!(text.contains(kind), "no {kind} decision replayed");
+    }
+    assert_eq!(
+        text.matches("\"start_mission\"").count(),
+        2,
+        "the division and one replan"
+    );
+    Ok(())
+}
