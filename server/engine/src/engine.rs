@@ -180,6 +180,9 @@ impl Engine {
             Event::MissionReplanRequested { mission_id } => {
                 self.request_replan(&mission_id, "requested".into(), now_ms, &mut out)?;
             }
+            Event::MissionRobotJoined { mission_id, robot } => {
+                self.join_mission(&mission_id, robot, now_ms, &mut out)?;
+            }
             Event::MissionFinished { mission_id, outcome } => {
                 self.mission_finished(&mission_id, outcome, now_ms, &mut out);
             }

@@ -422,6 +422,34 @@ async fn a_mission_is_followed_over_sse_and_cancelled_with_its_plans() -> Result
         .filter(|s| text.contains(&format!("\"status\":\"{s}\"")))
         .collect();
     assert!(statuses.ends_with(&["ready"]), "{statuses:?}: {text}");
+    // A third robot joins the planned mission: refused naming the field when its dock is bad, else it gets a
+    // plan of its own from a replan of what is left.
+    let joins = format!("/v1/missions/{id}/robots");
+    let (code, bad) = server.post(&joins, &robot("wh9", [0.05, 0.05])).await?;
+    assert_eq!(code, 400, "{bad}");
+    assert!(
+        bad["error"]["message"]
+            .as_str()
+            .unwrap_or_default()
+            .contains("robots[2].start"),
+        "{bad}"
+    );
+    let (code, joined) = server.post(&joins, &robot("wh9", ROBOTS[2].1)).await?;
+    assert_eq!(code, 202, "{joined}");
+    let grown = poll(
+        async || {
+            let (_, m) = server.get(&format!("/v1/missions/{id}")).await?;
+            let ready = m["plans"].as_array().is_some_and(|p| {
+                p.len() == 3
+                    && p.iter()
+                        .all(|p| p["status"] == "ready" && p["area_m2"].as_f64() > Some(0.0))
+            });
+            Ok(ready.then_some(m))
+        },
+        "the joined robot's share",
+    )
+    .await?;
+    assert_eq!(grown["plans"][2]["robot"], "wh9", "{grown}");
     let (code, cancelled) = server.delete(&format!("/v1/missions/{id}")).await?;
     assert_eq!(code, 200, "{cancelled}");
     assert_eq!(cancelled["status"], "cancelled");

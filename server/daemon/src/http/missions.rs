@@ -13,7 +13,9 @@ use axum::response::{IntoResponse, Response};
 use futures_util::stream::{self, Stream, StreamExt};
 use shift_engine::Event;
 use shift_planner::map::CellState;
-use shift_proto::{ErrorBody, MissionAccepted, MissionRequest, MissionStatus, MissionView, OccupancyGridDoc};
+use shift_proto::{
+    ErrorBody, MissionAccepted, MissionRequest, MissionRobot, MissionStatus, MissionView, OccupancyGridDoc,
+};
 use tokio_stream::wrappers::BroadcastStream;
 use tokio_stream::wrappers::errors::BroadcastStreamRecvError;
 
@@ -143,6 +145,37 @@ pub async fn replan_mission(
     let reply = state
         .engine
         .call(Event::MissionReplanRequested { mission_id: id.clone() })
+        .await?;
+    let view = match reply.missions.into_iter().last() {
+        Some(v) => v,
+        None => mission_view(&state, &id)?,
+    };
+    Ok((StatusCode::ACCEPTED, ApiJson(view)))
+}
+
+/// A robot joins a mission: checked as the mission's robots are (`robots[n]` in messages, n its place after
+/// the others), given a plan of the mission, and a replan divides what is left among all of them, the new
+/// robot included (each from where it stands). Under way, it gets its share at once; a mission not yet assigned
+/// gives it at assignment; a queued mission plans with it. 409 while the mission is being planned or once it
+/// ended.
+#[utoipa::path(post, path = "/v1/missions/{id}/robots", tag = "missions", params(("id" = String, Path)),
+    request_body = MissionRobot,
+    responses((status = 202, body = MissionView),
+        (status = 400, description = "invalid field (named in the message)", body = ErrorBody),
+        (status = 401, description = "no bearer token", body = ErrorBody),
+        (status = 403, description = "wrong bearer token", body = ErrorBody),
+        (status = 404, body = ErrorBody), (status = 409, body = ErrorBody)))]
+pub async fn join_mission(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+    ApiJson(robot): ApiJson<MissionRobot>,
+) -> Result<(StatusCode, ApiJson<MissionView>), ApiError> {
+    let reply = state
+        .engine
+        .call(Event::MissionRobotJoined {
+            mission_id: id.clone(),
+            robot,
+        })
         .await?;
     let view = match reply.missions.into_iter().last() {
         Some(v) => v,

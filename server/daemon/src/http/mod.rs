@@ -119,6 +119,10 @@ pub fn router(state: AppState) -> Router {
         )
         .route("/v1/missions/{id}/assign", post(missions::assign_mission))
         .route("/v1/missions/{id}/replan", post(missions::replan_mission))
+        .route(
+            "/v1/missions/{id}/robots",
+            limited(post(missions::join_mission), state.body_limits.request_bytes),
+        )
         .route("/v1/robots", get(robots::list_robots))
         .route("/v1/robots/{id}", get(robots::get_robot))
         .layer(TimeoutLayer::with_status_code(

@@ -29,6 +29,7 @@ use utoipa::OpenApi;
         super::missions::assign_mission,
         super::missions::cancel_mission,
         super::missions::replan_mission,
+        super::missions::join_mission,
         super::missions::mission_events,
         super::missions::get_site_coverage,
         super::ops::healthz,

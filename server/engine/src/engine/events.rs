@@ -172,6 +172,13 @@ pub enum Event {
         /// Mission id.
         mission_id: String,
     },
+    /// A robot joins a mission (`POST /v1/missions/{id}/robots`).
+    MissionRobotJoined {
+        /// Mission id.
+        mission_id: String,
+        /// The robot.
+        robot: shift_proto::MissionRobot,
+    },
     /// A mission job ended.
     MissionFinished {
         /// Mission id.
@@ -205,6 +212,7 @@ impl Event {
             Self::MissionAssignRequested { .. } => "mission_assign_requested",
             Self::MissionFinished { .. } => "mission_finished",
             Self::MissionReplanRequested { .. } => "mission_replan_requested",
+            Self::MissionRobotJoined { .. } => "mission_robot_joined",
             Self::Shutdown => "shutdown",
         }
     }
@@ -223,6 +231,7 @@ impl Event {
                 | Self::MissionCancelRequested { .. }
                 | Self::MissionAssignRequested { .. }
                 | Self::MissionReplanRequested { .. }
+                | Self::MissionRobotJoined { .. }
         )
     }
 }

@@ -7,12 +7,13 @@
 
 use std::sync::Arc;
 
-use shift_proto::{MissionStatus, PlanEvent, PlanStatus, WatchHealth};
+use shift_proto::{MissionRobot, MissionStatus, PlanEvent, PlanStatus, WatchHealth};
 
 use super::{Command, Engine};
 use crate::error::{EngineError, Result};
 use crate::mission::{MissionPlanned, ReplanOrder};
 use crate::mission_job::{MissionJob, PlannedPart};
+use crate::plan::PlanRecord;
 use crate::request::ParsedOptions;
 use crate::robots::Assignment;
 
@@ -53,6 +54,70 @@ impl Engine {
         m.dirty = true;
         out.push(Command::StoreMission(m.record.clone()));
         Ok(())
+    }
+
+    /// Robot `robot` joins mission `mission_id`: checked as a mission's robots are (`robots[n]` in messages, n
+    /// its place after the others), given a plan of the mission, and a replan gives it a balanced share of what
+    /// is left (each from where it stands). It drives at once when the mission is under way; a mission not yet
+    /// assigned gets it at its assignment; a queued mission simply plans with it.
+    pub(super) fn join_mission(
+        &mut self,
+        mission_id: &str,
+        robot: MissionRobot,
+        now_ms: u64,
+        out: &mut Vec<Command>,
+    ) -> Result<()> {
+        let m = self
+            .missions
+            .get(mission_id)
+            .ok_or_else(|| EngineError::UnknownMission(mission_id.to_owned()))?;
+        let status = m.record.status;
+        let planned = m.record.planned.is_some();
+        if !(status == MissionStatus::Queued
+            || (planned && matches!(status, MissionStatus::Ready | MissionStatus::Active)))
+        {
+            return Err(EngineError::MissionState {
+                mission_id: mission_id.to_owned(),
+                status,
+                action: "take a robot",
+            });
+        }
+        let mut request = m.record.request.clone();
+        request.robots.push(robot.clone());
+        let site = self
+            .sites
+            .get(&request.site)
+            .ok_or_else(|| EngineError::UnknownSite(request.site.clone()))?;
+        crate::mission::validate_mission(&request, &site.map.grid)?;
+        let n = request.robots.len() - 1;
+        let plan_request = crate::mission::MissionRecord::plan_request(&request, n)
+            .ok_or_else(|| EngineError::InvalidRequest("robots: the new robot is missing".into()))?;
+        let seq = self.next_seq;
+        self.next_seq += 1;
+        let mut rec = PlanRecord {
+            mission: Some(mission_id.to_owned()),
+            ..PlanRecord::queued(format!("p-{seq}"), seq, plan_request, now_ms)
+        };
+        if status == MissionStatus::Active {
+            // Its share is delivered to it as soon as the replan ends.
+            rec.robot = Some(robot.id.clone());
+        }
+        out.push(Command::StorePlan(rec.clone()));
+        out.push(Command::Publish(PlanEvent::Status(rec.to_response())));
+        let plan_id = rec.plan_id.clone();
+        self.plans.insert(plan_id.clone(), rec);
+        let Some(m) = self.missions.get_mut(mission_id) else {
+            return Ok(());
+        };
+        m.record.request = request;
+        m.record.plan_ids.push(plan_id);
+        m.record.updated_ms = now_ms;
+        m.dirty = true;
+        out.push(Command::StoreMission(m.record.clone()));
+        if status == MissionStatus::Queued {
+            return Ok(()); // its job plans the robot with the others
+        }
+        self.request_replan(mission_id, format!("robot {} joined", robot.id), now_ms, out)
     }
 
     /// True when robot `id` was seen and is gone: its token left (for robots without one, the daemon's
@@ -207,6 +272,7 @@ impl Engine {
         ));
         if let Some(p) = m.record.planned.as_mut() {
             // Coverage still counts against the mission's first division; the parts' areas are the new ones.
+            p.areas_m2.resize(m.record.request.robots.len(), 0.0);
             for (i, r) in m.record.request.robots.iter().enumerate() {
                 let k = taking.iter().position(|t| *t == r.id);
                 if let Some(a) = p.areas_m2.get_mut(i) {
@@ -275,10 +341,8 @@ impl Engine {
         if driven_by_it {
             rec.status = PlanStatus::Active;
             rec.watch = Some(WatchHealth::Watching);
-        } else if matches!(
-            rec.status,
-            PlanStatus::Cancelled | PlanStatus::Failed | PlanStatus::Done
-        ) {
+        } else if rec.status != PlanStatus::Ready {
+            // Never driven (a robot that joined a mission not yet assigned), or ended: ready for assignment.
             rec.status = PlanStatus::Ready;
             rec.robot = None;
         }

@@ -332,3 +332,70 @@ fn a_lost_robot_that_comes_back_takes_a_share_again() {
     assert_eq!(e.plan("p-3").map(|r| r.status), Some(PlanStatus::Active));
     assert_eq!(e.mission("m-1").map(|m| m.dropped.len()), Some(0));
 }
+
+#[test]
+fn a_robot_that_joins_a_mission_under_way_takes_a_share_of_what_is_left() {
+    let (mut e, job) = planned();
+    let fleet = run_mission_job(&job).expect("plans");
+    let MissionOutcome::Planned { parts, .. } = planned_outcome(&job, &fleet, 5.0) else {
+        unreachable!()
+    };
+    e.handle(
+        Event::MissionAssignRequested {
+            mission_id: "m-1".into(),
+            docs: parts.iter().map(|p| p.doc.clone()).collect(),
+        },
+        30,
+    )
+    .expect("assigned");
+    let t = drive(
+        &mut e,
+        &[
+            ("r1", poses(&parts[0].doc, 0.0, 0.3)),
+            ("r2", poses(&parts[1].doc, 0.0, 0.3)),
+        ],
+        1_000,
+    );
+    let joining = |id: &str, start: [f64; 2]| Event::MissionRobotJoined {
+        mission_id: "m-1".into(),
+        robot: shift_proto::MissionRobot::new(id, start, 0.1, 0.2),
+    };
+    // Refused, naming the field, nothing kept: a duplicate id, a dock off the map.
+    let err = e.handle(joining("r1", [1.5, 1.0]), t).expect_err("duplicate");
+    assert!(err.to_string().contains("robots[2].id \"r1\" is named twice"), "{err}");
+    let err = e.handle(joining("r3", [9.0, 1.0]), t).expect_err("off the map");
+    assert!(err.to_string().contains("robots[2] (r3)"), "{err}");
+    assert_eq!(e.mission("m-1").map(|m| m.plan_ids.len()), Some(2));
+    let c = e.handle(joining("r3", [1.5, 1.0]), t + 10).expect("joined");
+    let job = mission_job(&c).expect("a replan with r3");
+    assert_eq!(
+        job.plan_ids,
+        vec!["p-2".to_string(), "p-3".to_string(), "p-4".to_string()]
+    );
+    assert_eq!(job.request.robots[2].start, [1.5, 1.0]);
+    let fleet = run_mission_job(&job).expect("replans");
+    let c = e
+        .handle(
+            Event::MissionFinished {
+                mission_id: "m-1".into(),
+                outcome: planned_outcome(&job, &fleet, 5.0),
+            },
+            t + 20,
+        )
+        .expect("replanned");
+    let got: Vec<(String, String, u64)> = delivered(&c)
+        .into_iter()
+        .map(|(r, d)| (r, d.plan_id.clone(), d.version))
+        .collect();
+    assert_eq!(
+        got,
+        vec![
+            ("r1".into(), "p-2".into(), 2),
+            ("r2".into(), "p-3".into(), 2),
+            ("r3".into(), "p-4".into(), 1)
+        ]
+    );
+    let v = view(&c).expect("view");
+    assert_eq!(v.plans.len(), 3);
+    assert!(v.plans[2].area_m2.is_some_and(|a| a > 0.0), "{v:?}");
+}
