@@ -133,6 +133,7 @@ def test_a_cancelled_mission_cancels_its_plans(api: Client) -> None:
         lambda: api.cancel_mission(accepted.mission_id),
         lambda: api.assign_mission(accepted.mission_id),
         lambda: api.replan_mission(accepted.mission_id),
+        lambda: api.join_mission(accepted.mission_id, MissionRobot("pc3", (7.0, 4.0), 0.15, 0.3)),
     ):
         with pytest.raises(ShiftError) as e:
             call()

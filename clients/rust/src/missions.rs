@@ -3,7 +3,7 @@
 //! measured coverage raster.
 
 use reqwest::Method;
-use shift_proto::{MissionAccepted, MissionRequest, MissionView, OccupancyGridDoc};
+use shift_proto::{MissionAccepted, MissionRequest, MissionRobot, MissionView, OccupancyGridDoc};
 
 use crate::client::{Client, segment};
 use crate::error::Result;
@@ -99,6 +99,25 @@ impl Client {
             "the mission",
         )
         .await
+    }
+
+    /// `POST /v1/missions/{id}/robots`: `robot` joins the mission and takes a balanced share of what is left
+    /// (a replan of the whole fleet, each robot from where it is). A bad robot answers 400 naming
+    /// `robots[n]` (n its place after the mission's robots); 409 while the mission is being planned or once it
+    /// ended.
+    ///
+    /// ```no_run
+    /// # async fn run() -> shift_client::Result<()> {
+    /// # let client = shift_client::Client::new("http://127.0.0.1:7878")?;
+    /// let robot = shift_client::proto::MissionRobot::new("r4", [2.0, 3.0], 0.25, 0.5);
+    /// let view = client.join_mission("m-1", &robot).await?;
+    /// println!("{} robots now", view.plans.len());
+    /// # Ok(()) }
+    /// ```
+    pub async fn join_mission(&self, mission_id: &str, robot: &MissionRobot) -> Result<MissionView> {
+        let path = format!("/v1/missions/{}/robots", segment(mission_id));
+        self.json(self.request(Method::POST, &path).json(robot), "the mission")
+            .await
     }
 
     /// `DELETE /v1/missions/{id}`: cancels the mission and its plans not yet driven (a robot already driving

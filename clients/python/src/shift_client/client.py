@@ -15,6 +15,7 @@ from .events import PlanEvent, decode_messages, decode_mission_messages, iter_ss
 from .types import (
     MissionAccepted,
     MissionRequest,
+    MissionRobot,
     MissionView,
     OccupancyGrid,
     PlanAccepted,
@@ -283,6 +284,13 @@ class Client:
         again among its robots that are not lost, each from where it is; each plan then gets its next version.
         Answers at once (202) with the mission's view. 409 before it is planned and once done or cancelled."""
         return MissionView.from_json(self._request("POST", f"/v1/missions/{_seg(mission_id)}/replan", json={}))
+
+    def join_mission(self, mission_id: str, robot: MissionRobot) -> MissionView:
+        """``POST /v1/missions/{id}/robots``: ``robot`` joins the mission and takes a balanced share of what is
+        left (a replan of the whole fleet, each robot from where it is). 400 names ``robots[n]``; 409 while the
+        mission is being planned or once it ended."""
+        path = f"/v1/missions/{_seg(mission_id)}/robots"
+        return MissionView.from_json(self._request("POST", path, json=robot.to_json()))
 
     def cancel_mission(self, mission_id: str) -> MissionView:
         """``DELETE /v1/missions/{id}``: cancels the mission and its plans not yet driven (a robot driving its
