@@ -40,7 +40,13 @@ impl Engine {
         }
         match m.record.replan.as_mut() {
             Some(order) if order.running.is_some() => order.again = true,
-            Some(order) => order.reason = format!("{}; {reason}", order.reason),
+            Some(order) => {
+                order.reason = format!("{}; {reason}", order.reason);
+                // Left waiting when nobody could take part (every robot lost): queued again now.
+                if !self.queue.iter().any(|id| id == mission_id) {
+                    self.queue.push_back(mission_id.to_owned());
+                }
+            }
             None => {
                 m.record.replan = Some(ReplanOrder {
                     reason,
@@ -133,7 +139,9 @@ impl Engine {
     pub(super) fn watch_mission_robots(&mut self, now_ms: u64, out: &mut Vec<Command>) {
         let mut orders: Vec<(String, String, Option<String>, Option<String>)> = Vec::new();
         for (id, m) in &self.missions {
-            if m.record.status != MissionStatus::Active {
+            // Active, or failed because every robot was lost (one coming back picks the mission up again).
+            let lost_all = m.record.status == MissionStatus::Failed && !m.record.dropped.is_empty();
+            if !(m.record.status == MissionStatus::Active || lost_all) {
                 continue;
             }
             for (plan_id, r) in m.record.plan_ids.iter().zip(&m.record.request.robots) {
@@ -290,7 +298,12 @@ impl Engine {
         for (plan_id, robot) in pairs {
             if taking.contains(&robot) {
                 let Some(part) = parts.next() else { break };
-                self.replace_plan(&plan_id, &robot, part, &reason, now_ms, out);
+                // Lost while the replan ran: its share waits for the replan that loss asked for.
+                if dropped.contains(&robot) {
+                    self.drop_plan(&plan_id, &robot, now_ms, out);
+                } else {
+                    self.replace_plan(&plan_id, &robot, part, &reason, now_ms, out);
+                }
             } else if dropped.contains(&robot) {
                 self.drop_plan(&plan_id, &robot, now_ms, out);
             }

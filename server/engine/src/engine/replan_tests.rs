@@ -399,3 +399,64 @@ fn a_robot_that_joins_a_mission_under_way_takes_a_share_of_what_is_left() {
     assert_eq!(v.plans.len(), 3);
     assert!(v.plans[2].area_m2.is_some_and(|a| a > 0.0), "{v:?}");
 }
+
+#[test]
+fn a_mission_whose_robots_were_all_lost_is_picked_up_by_the_first_back() {
+    let (mut e, job) = planned();
+    let fleet = run_mission_job(&job).expect("plans");
+    let MissionOutcome::Planned { parts, .. } = planned_outcome(&job, &fleet, 5.0) else {
+        unreachable!()
+    };
+    alive(&mut e, "r1", true, 25);
+    alive(&mut e, "r2", true, 25);
+    e.handle(
+        Event::MissionAssignRequested {
+            mission_id: "m-1".into(),
+            docs: parts.iter().map(|p| p.doc.clone()).collect(),
+        },
+        30,
+    )
+    .expect("assigned");
+    let t = drive(
+        &mut e,
+        &[
+            ("r1", poses(&parts[0].doc, 0.0, 0.3)),
+            ("r2", poses(&parts[1].doc, 0.0, 0.3)),
+        ],
+        1_000,
+    );
+    // Both go, one after the other: the replan the first loss started ends after the second is gone, and the
+    // one asked for then finds nobody to plan for.
+    let c = alive(&mut e, "r1", false, t + 10);
+    let first = mission_job(&c).expect("a replan for r2");
+    alive(&mut e, "r2", false, t + 20);
+    let fleet = run_mission_job(&first).expect("replans");
+    let c = e
+        .handle(
+            Event::MissionFinished {
+                mission_id: "m-1".into(),
+                outcome: planned_outcome(&first, &fleet, 5.0),
+            },
+            t + 30,
+        )
+        .expect("replanned");
+    assert!(mission_job(&c).is_none(), "nobody left to plan for");
+    assert_eq!(e.mission("m-1").map(|m| m.dropped.len()), Some(2));
+    assert_eq!(e.mission("m-1").map(|m| m.status), Some(MissionStatus::Failed));
+    // r1 comes back: the mission is replanned for it, and it is under way again.
+    let c = alive(&mut e, "r1", true, t + 1_000);
+    let job = mission_job(&c).expect("replanned for r1");
+    assert_eq!(job.plan_ids, vec!["p-2".to_string()]);
+    let fleet = run_mission_job(&job).expect("replans");
+    let c = e
+        .handle(
+            Event::MissionFinished {
+                mission_id: "m-1".into(),
+                outcome: planned_outcome(&job, &fleet, 5.0),
+            },
+            t + 1_100,
+        )
+        .expect("replanned");
+    assert_eq!(delivered(&c).len(), 1);
+    assert_eq!(e.mission("m-1").map(|m| m.status), Some(MissionStatus::Active));
+}
