@@ -412,6 +412,18 @@ async fn a_two_robot_mission_through_the_sdk_and_shiftctl() -> Result<()> {
     assert_eq!(replanned.mission_id, id);
     assert_ne!(replanned.status, MissionStatus::Failed, "{replanned:?}");
 
+    // A robot joins by shiftctl: a bad spec exits 2, a dock on the map's edge is refused naming the field, a
+    // good one gets a plan of the mission.
+    let (code, _, err) = ctl(b, &["mission", "join", &id, "--robot", "r3:1,1:0.15"]).await?;
+    assert_eq!(code, 2, "{err}");
+    assert_eq!(
+        refused(b, &["mission", "join", &id, "--robot", "r3:-5,1:0.15:0.3"]).await?,
+        (400, "invalid_request".into())
+    );
+    let grown: MissionView = json(b, &["mission", "join", &id, "--robot", "r3:1.5,1.2:0.15:0.3"]).await?;
+    assert_eq!(grown.plans.len(), 3, "{grown:?}");
+    assert_eq!(grown.plans[2].robot, "r3");
+
     drop(joined);
     server.stop().await
 }

@@ -479,7 +479,7 @@ impl Engine {
         }
     }
 
-    fn push_mission_view(&mut self, mission_id: &str, now_ms: u64, out: &mut Vec<Command>) {
+    pub(super) fn push_mission_view(&mut self, mission_id: &str, now_ms: u64, out: &mut Vec<Command>) {
         let Some(m) = self.missions.get_mut(mission_id) else {
             return;
         };

@@ -120,10 +120,13 @@ impl Engine {
         m.record.updated_ms = now_ms;
         m.dirty = true;
         out.push(Command::StoreMission(m.record.clone()));
-        if status == MissionStatus::Queued {
-            return Ok(()); // its job plans the robot with the others
+        if status != MissionStatus::Queued {
+            // (A queued mission's job plans the robot with the others.)
+            self.request_replan(mission_id, format!("robot {} joined", robot.id), now_ms, out)?;
         }
-        self.request_replan(mission_id, format!("robot {} joined", robot.id), now_ms, out)
+        // The caller's answer shows the robot at once.
+        self.push_mission_view(mission_id, now_ms, out);
+        Ok(())
     }
 
     /// True when robot `id` was seen and is gone: its token left (for robots without one, the daemon's

@@ -47,7 +47,7 @@ pub enum Command {
     /// Draw a plan on its site's map as a PNG.
     Render(RenderArgs),
     /// A mission for a fleet: `mission create --site S --robot ID:X,Y:RADIUS:TOOL_WIDTH …`, or
-    /// `mission show|assign|replan|cancel ID`.
+    /// `mission show|assign|replan|join|cancel ID`.
     Mission {
         /// What to do.
         #[command(subcommand)]
@@ -189,6 +189,14 @@ pub enum MissionAction {
     Replan {
         /// Mission id.
         id: String,
+    },
+    /// Add a robot to a mission: it takes a balanced share of what is left.
+    Join {
+        /// Mission id.
+        id: String,
+        /// The robot: its id, dock X,Y (metres, map frame), footprint radius and tool width (metres).
+        #[arg(long = "robot", value_name = "ID:X,Y:RADIUS:TOOL_WIDTH", allow_hyphen_values = true)]
+        robot: String,
     },
     /// Cancel a mission and its plans not yet driven.
     Cancel {

@@ -1,4 +1,4 @@
-//! `mission create|show|assign|replan|cancel` and `coverage SITE [--png FILE]`.
+//! `mission create|show|assign|replan|join|cancel` and `coverage SITE [--png FILE]`.
 
 use std::collections::HashSet;
 
@@ -16,6 +16,7 @@ pub async fn mission(client: &Client, action: MissionAction, json: bool) -> anyh
         MissionAction::Show { id } => client.mission(&id).await?,
         MissionAction::Assign { id } => client.assign_mission(&id).await?,
         MissionAction::Replan { id } => client.replan_mission(&id).await?,
+        MissionAction::Join { id, robot: text } => client.join_mission(&id, &robot("--robot", &text)?).await?,
         MissionAction::Cancel { id } => client.cancel_mission(&id).await?,
     };
     if json {
