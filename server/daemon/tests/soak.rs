@@ -296,17 +296,25 @@ async fn a_working_fleet_leaves_memory_threads_files_and_store_flat() -> Result<
     // waves (robots finish their plans and wait for the next), so one sample says little. Flat means: the median
     // RSS of the last third is not above the highest RSS of the warm-up by more than the bound. A leak raises
     // the median; a wave of work raises single samples.
-    let warm_peak = samples[..=warm].iter().map(|s| s.rss_kb).max().unwrap_or(after.rss_kb);
-    let mut tail: Vec<u64> = samples[samples.len() - samples.len().div_ceil(3)..]
+    // The short run compares against the highest RSS before the last third (warm-up and middle third): its
+    // fleet's work in hand still swings by half (4 to 10 plans driven at once; one CI-like run had 4-6 in
+    // warm-up and 8-10 in the last third, +33 %, and the next run -41 %), and the middle third has seen such a
+    // wave when the daemon is sound. A gross leak still outgrows it.
+    let long = duration.as_secs() >= 1200;
+    let tail_from = samples.len() - samples.len().div_ceil(3);
+    let reference_end = if long { warm + 1 } else { tail_from.max(warm + 1) };
+    let warm_peak = samples[..reference_end]
         .iter()
         .map(|s| s.rss_kb)
-        .collect();
+        .max()
+        .unwrap_or(after.rss_kb);
+    let mut tail: Vec<u64> = samples[tail_from..].iter().map(|s| s.rss_kb).collect();
     tail.sort_unstable();
     let tail_median = tail[tail.len() / 2];
     let growth = tail_median as f64 / warm_peak as f64;
     eprintln!(
         "soak: {:.0} s, {robots} robots, {plans_made} plans asked, {assigned} assigned, {corrections} corrections; \
-         RSS {} kB at most in warm-up (to {:.0} s) → median {} kB over the last third ({:+.1} %), {} kB at most \
+         RSS {} kB at most before the last third (warm-up to {:.0} s) → median {} kB over the last third ({:+.1} %), {} kB at most \
          after warm-up, {} kB at the end; threads {} → {}; fds {} → {}; store {} → {} B",
         last.at_s,
         warm_peak,
@@ -353,11 +361,10 @@ async fn a_working_fleet_leaves_memory_threads_files_and_store_flat() -> Result<
     // the test command holds catches gross leaks only: 25 % of RSS, two doublings of the store. Keeping a
     // plan's document per correction (hundreds of corrections of ~100 kB) would fail both; the 30-minute run
     // holds the bar.
-    let long = duration.as_secs() >= 1200;
     let bound = if long { 1.05 } else { 1.25 };
     ensure!(
         growth <= bound,
-        "RSS grew {:.1} % after warm-up (median of the last third against the warm-up's peak)",
+        "RSS grew {:.1} % after warm-up (median of the last third against the peak before it; the warm-up's in the long run)",
         (growth - 1.0) * 100.0
     );
     ensure!(

@@ -379,7 +379,9 @@ impl Engine {
                 action: "assign",
             });
         }
+        // Robots lost and divided away have no part to take.
         let pairs: Vec<(String, String)> = (m.record.plan_ids.iter().zip(&m.record.request.robots))
+            .filter(|(_, r)| !m.record.dropped.contains(&r.id))
             .map(|(p, r)| (p.clone(), r.id.clone()))
             .collect();
         // All or nothing: every plan must take its robot before any does.
