@@ -85,7 +85,13 @@ pub struct Engine {
     /// When rasters were last sent to the store and to the read model, milliseconds.
     coverage_stored_ms: u64,
     coverage_viewed_ms: u64,
+    /// When every mission was last looked over (robots lost or back, views due), milliseconds.
+    missions_scanned_ms: Option<u64>,
 }
+
+/// Missions are looked over at most this often, and at every liveliness change (odometry brings thousands of
+/// events a second; a robot silent past `robot_timeout_s` is found lost at most this much later).
+const MISSION_SCAN_MS: u64 = 250;
 
 impl Engine {
     /// An empty engine.
@@ -108,6 +114,7 @@ impl Engine {
     /// Handles one event at `now_ms` (milliseconds since the Unix epoch). On error nothing changed.
     pub fn handle(&mut self, event: Event, now_ms: u64) -> Result<Vec<Command>> {
         let mut out = Vec::new();
+        let liveliness = matches!(event, Event::RobotLiveliness { .. });
         match event {
             Event::Restore {
                 sites,
@@ -191,12 +198,15 @@ impl Engine {
                 self.flush_coverage(now_ms, true, true, &mut out);
             }
         }
-        if !self.missions.is_empty() {
+        let scan = !self.missions.is_empty()
+            && (liveliness || self.missions_scanned_ms.is_none_or(|t| now_ms >= t + MISSION_SCAN_MS));
+        if scan {
+            self.missions_scanned_ms = Some(now_ms);
             self.watch_mission_robots(now_ms, &mut out);
         }
         self.pump(now_ms, &mut out);
         if !self.missions.is_empty() {
-            self.refresh_touched_missions(now_ms, &mut out);
+            self.refresh_touched_missions(now_ms, scan, &mut out);
         }
         let plan_ended = (out.iter()).any(|c| matches!(c, Command::StorePlan(r) if r.status == PlanStatus::Done));
         let restored = out.iter().any(|c| matches!(c, Command::SiteStatic { .. }));

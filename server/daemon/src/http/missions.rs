@@ -21,6 +21,7 @@ use tokio_stream::wrappers::errors::BroadcastStreamRecvError;
 
 use super::AppState;
 use super::error::{ApiError, ApiJson};
+use crate::engine_loop::handle::Reply;
 
 fn internal(what: &str) -> ApiError {
     ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, "internal", what.to_owned())
@@ -77,6 +78,14 @@ fn mission_view(state: &AppState, id: &str) -> Result<MissionView, ApiError> {
         .ok_or_else(|| ApiError::not_found(format!("unknown mission {id:?}")))
 }
 
+/// The mission's view the engine's answer carries (its latest), else the read model's.
+fn answered(state: &AppState, reply: Reply, id: &str) -> Result<MissionView, ApiError> {
+    match reply.missions.into_iter().last() {
+        Some(v) => Ok(v),
+        None => mission_view(state, id),
+    }
+}
+
 /// A mission's status, its plans (one per robot), planned and measured coverage, progress and ETA.
 #[utoipa::path(get, path = "/v1/missions/{id}", tag = "missions", params(("id" = String, Path)),
     responses((status = 200, body = MissionView), (status = 404, body = ErrorBody)))]
@@ -122,10 +131,7 @@ pub async fn assign_mission(
             docs,
         })
         .await?;
-    match reply.missions.into_iter().last() {
-        Some(v) => Ok(ApiJson(v)),
-        None => Ok(ApiJson(mission_view(&state, &id)?)),
-    }
+    Ok(ApiJson(answered(&state, reply, &id)?))
 }
 
 /// Replan what the mission has left: the cells its robots' tools swept are left out, the rest (cleaned of
@@ -146,11 +152,7 @@ pub async fn replan_mission(
         .engine
         .call(Event::MissionReplanRequested { mission_id: id.clone() })
         .await?;
-    let view = match reply.missions.into_iter().last() {
-        Some(v) => v,
-        None => mission_view(&state, &id)?,
-    };
-    Ok((StatusCode::ACCEPTED, ApiJson(view)))
+    Ok((StatusCode::ACCEPTED, ApiJson(answered(&state, reply, &id)?)))
 }
 
 /// A robot joins a mission: checked as the mission's robots are (`robots[n]` in messages, n its place after
@@ -177,11 +179,7 @@ pub async fn join_mission(
             robot,
         })
         .await?;
-    let view = match reply.missions.into_iter().last() {
-        Some(v) => v,
-        None => mission_view(&state, &id)?,
-    };
-    Ok((StatusCode::ACCEPTED, ApiJson(view)))
+    Ok((StatusCode::ACCEPTED, ApiJson(answered(&state, reply, &id)?)))
 }
 
 /// Cancel a mission: its plans not yet driven are cancelled; a robot already driving its part finishes it

@@ -23,30 +23,17 @@ impl Engine {
         now_ms: u64,
         out: &mut Vec<Command>,
     ) -> Result<()> {
-        if self.draining {
-            return Err(EngineError::ShuttingDown);
-        }
-        crate::site::validate_site_name(&request.site)?;
-        let site = self
-            .sites
-            .get(&request.site)
-            .ok_or_else(|| EngineError::UnknownSite(request.site.clone()))?;
-        validate_mission(&request, &site.map.grid)?;
-        if self.queue.len() >= self.config.queue_capacity {
-            return Err(EngineError::QueueFull {
-                capacity: self.config.queue_capacity,
-            });
-        }
-        let seq = self.next_seq;
-        self.next_seq += 1;
+        let grid = self.site_taking_jobs(&request.site)?;
+        validate_mission(&request, &grid)?;
+        self.queue_room()?;
+        let seq = self.take_seq();
         let mission_id = format!("m-{seq}");
         let mut plan_ids = Vec::with_capacity(request.robots.len());
         for i in 0..request.robots.len() {
             let Some(plan_request) = MissionRecord::plan_request(&request, i) else {
                 continue;
             };
-            let seq = self.next_seq;
-            self.next_seq += 1;
+            let seq = self.take_seq();
             let rec = PlanRecord {
                 mission: Some(mission_id.clone()),
                 ..PlanRecord::queued(format!("p-{seq}"), seq, plan_request, now_ms)
@@ -491,8 +478,9 @@ impl Engine {
         out.push(Command::MissionChanged(m.record.to_view(&self.plans, measured)));
     }
 
-    /// Missions whose plans changed in `out` (or whose robot moved): refresh them.
-    pub(super) fn refresh_touched_missions(&mut self, now_ms: u64, out: &mut Vec<Command>) {
+    /// Missions whose plans changed in `out`, and with `scan_all` every mission swept since (its view's
+    /// measured coverage moved): refresh them.
+    pub(super) fn refresh_touched_missions(&mut self, now_ms: u64, scan_all: bool, out: &mut Vec<Command>) {
         let mut touched: Vec<String> = out
             .iter()
             .filter_map(|c| match c {
@@ -501,7 +489,9 @@ impl Engine {
                 _ => None,
             })
             .collect();
-        touched.extend(self.missions.iter().filter(|(_, m)| m.dirty).map(|(id, _)| id.clone()));
+        if scan_all {
+            touched.extend(self.missions.iter().filter(|(_, m)| m.dirty).map(|(id, _)| id.clone()));
+        }
         touched.sort_unstable();
         touched.dedup();
         for id in touched {

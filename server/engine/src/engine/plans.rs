@@ -2,6 +2,7 @@
 
 use std::sync::Arc;
 
+use shift_planner::map::OccupancyGrid;
 use shift_proto::{PlanDocument, PlanEvent, PlanRequest, PlanStatus};
 
 use super::{Command, Engine, JobOutcome};
@@ -14,23 +15,10 @@ use crate::site::{LoadedSite, Site};
 
 impl Engine {
     pub(super) fn request(&mut self, request: PlanRequest, now_ms: u64, out: &mut Vec<Command>) -> Result<()> {
-        if self.draining {
-            return Err(EngineError::ShuttingDown);
-        }
-        // A name that breaks the rule is a bad request, not an unknown site.
-        crate::site::validate_site_name(&request.site)?;
-        let site = self
-            .sites
-            .get(&request.site)
-            .ok_or_else(|| EngineError::UnknownSite(request.site.clone()))?;
-        validate(&request, &site.map.grid)?;
-        if self.queue.len() >= self.config.queue_capacity {
-            return Err(EngineError::QueueFull {
-                capacity: self.config.queue_capacity,
-            });
-        }
-        let seq = self.next_seq;
-        self.next_seq += 1;
+        let grid = self.site_taking_jobs(&request.site)?;
+        validate(&request, &grid)?;
+        self.queue_room()?;
+        let seq = self.take_seq();
         let rec = PlanRecord::queued(format!("p-{seq}"), seq, request, now_ms);
         self.queue.push_back(rec.plan_id.clone());
         out.push(Command::StorePlan(rec.clone()));
@@ -38,6 +26,37 @@ impl Engine {
         self.plans.insert(rec.plan_id.clone(), rec);
         self.retain(out);
         Ok(())
+    }
+
+    /// The grid of `site` when the engine takes new jobs there: not draining, a valid name (a name that breaks
+    /// the rule is a bad request, not an unknown site), a known site.
+    pub(super) fn site_taking_jobs(&self, site: &str) -> Result<Arc<OccupancyGrid>> {
+        if self.draining {
+            return Err(EngineError::ShuttingDown);
+        }
+        crate::site::validate_site_name(site)?;
+        let s = self
+            .sites
+            .get(site)
+            .ok_or_else(|| EngineError::UnknownSite(site.to_owned()))?;
+        Ok(s.map.grid.clone())
+    }
+
+    /// Room for one more job in the queue.
+    pub(super) fn queue_room(&self) -> Result<()> {
+        if self.queue.len() >= self.config.queue_capacity {
+            return Err(EngineError::QueueFull {
+                capacity: self.config.queue_capacity,
+            });
+        }
+        Ok(())
+    }
+
+    /// The next acceptance number (plan and mission ids come from it).
+    pub(super) fn take_seq(&mut self) -> u64 {
+        let seq = self.next_seq;
+        self.next_seq += 1;
+        seq
     }
 
     /// Forgets the oldest settled plans beyond `retain_plans` (settled: not queued, planning or driven).

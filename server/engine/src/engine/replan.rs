@@ -98,8 +98,7 @@ impl Engine {
         let n = request.robots.len() - 1;
         let plan_request = crate::mission::MissionRecord::plan_request(&request, n)
             .ok_or_else(|| EngineError::InvalidRequest("robots: the new robot is missing".into()))?;
-        let seq = self.next_seq;
-        self.next_seq += 1;
+        let seq = self.take_seq();
         let mut rec = PlanRecord {
             mission: Some(mission_id.to_owned()),
             ..PlanRecord::queued(format!("p-{seq}"), seq, plan_request, now_ms)

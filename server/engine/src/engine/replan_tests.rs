@@ -84,6 +84,26 @@ fn delivered(cmds: &[Command]) -> Vec<(String, Arc<PlanDocument>)> {
         .collect()
 }
 
+/// A planned mission, both robots alive (their tokens) and every plan assigned: the engine and the parts.
+fn assigned() -> (Engine, Vec<crate::mission_job::PlannedPart>) {
+    let (mut e, job) = planned();
+    let fleet = run_mission_job(&job).expect("plans");
+    let MissionOutcome::Planned { parts, .. } = planned_outcome(&job, &fleet, 5.0) else {
+        unreachable!()
+    };
+    alive(&mut e, "r1", true, 25);
+    alive(&mut e, "r2", true, 25);
+    e.handle(
+        Event::MissionAssignRequested {
+            mission_id: "m-1".into(),
+            docs: parts.iter().map(|p| p.doc.clone()).collect(),
+        },
+        30,
+    )
+    .expect("assigned");
+    (e, parts)
+}
+
 #[test]
 fn a_robot_lost_part_way_hands_its_rest_to_the_other_who_finishes_the_mission() {
     let (mut e, job) = planned();
@@ -186,19 +206,7 @@ fn a_robot_lost_part_way_hands_its_rest_to_the_other_who_finishes_the_mission() 
 
 #[test]
 fn a_restart_with_a_mission_under_way_replans_it_and_a_mission_not_planned_cannot_be() {
-    let (mut e, job) = planned();
-    let fleet = run_mission_job(&job).expect("plans");
-    let MissionOutcome::Planned { parts, .. } = planned_outcome(&job, &fleet, 5.0) else {
-        unreachable!()
-    };
-    e.handle(
-        Event::MissionAssignRequested {
-            mission_id: "m-1".into(),
-            docs: parts.iter().map(|p| p.doc.clone()).collect(),
-        },
-        30,
-    )
-    .expect("assigned");
+    let (mut e, parts) = assigned();
     let t = drive(&mut e, &[("r1", poses(&parts[0].doc, 0.0, 0.5))], 1_000);
     e.handle(Event::Shutdown, t).expect("shutdown");
     let Event::MapUploaded { site } = super::tests::site_event("s") else {
@@ -259,26 +267,13 @@ fn a_restart_with_a_mission_under_way_replans_it_and_a_mission_not_planned_canno
 
 #[test]
 fn a_lost_robot_that_comes_back_takes_a_share_again() {
-    let (mut e, job) = planned();
-    let fleet = run_mission_job(&job).expect("plans");
-    let MissionOutcome::Planned { parts, .. } = planned_outcome(&job, &fleet, 5.0) else {
-        unreachable!()
-    };
-    alive(&mut e, "r1", true, 25);
-    alive(&mut e, "r2", true, 25);
-    let c = e
-        .handle(
-            Event::MissionAssignRequested {
-                mission_id: "m-1".into(),
-                docs: parts.iter().map(|p| p.doc.clone()).collect(),
-            },
-            30,
-        )
-        .expect("assigned");
-    let docs = delivered(&c);
+    let (mut e, parts) = assigned();
     let t = drive(
         &mut e,
-        &[("r1", poses(&docs[0].1, 0.0, 0.2)), ("r2", poses(&docs[1].1, 0.0, 0.2))],
+        &[
+            ("r1", poses(&parts[0].doc, 0.0, 0.2)),
+            ("r2", poses(&parts[1].doc, 0.0, 0.2)),
+        ],
         1_000,
     );
     let c = alive(&mut e, "r2", false, t + 10);
@@ -335,19 +330,7 @@ fn a_lost_robot_that_comes_back_takes_a_share_again() {
 
 #[test]
 fn a_robot_that_joins_a_mission_under_way_takes_a_share_of_what_is_left() {
-    let (mut e, job) = planned();
-    let fleet = run_mission_job(&job).expect("plans");
-    let MissionOutcome::Planned { parts, .. } = planned_outcome(&job, &fleet, 5.0) else {
-        unreachable!()
-    };
-    e.handle(
-        Event::MissionAssignRequested {
-            mission_id: "m-1".into(),
-            docs: parts.iter().map(|p| p.doc.clone()).collect(),
-        },
-        30,
-    )
-    .expect("assigned");
+    let (mut e, parts) = assigned();
     let t = drive(
         &mut e,
         &[
@@ -402,21 +385,7 @@ fn a_robot_that_joins_a_mission_under_way_takes_a_share_of_what_is_left() {
 
 #[test]
 fn a_mission_whose_robots_were_all_lost_is_picked_up_by_the_first_back() {
-    let (mut e, job) = planned();
-    let fleet = run_mission_job(&job).expect("plans");
-    let MissionOutcome::Planned { parts, .. } = planned_outcome(&job, &fleet, 5.0) else {
-        unreachable!()
-    };
-    alive(&mut e, "r1", true, 25);
-    alive(&mut e, "r2", true, 25);
-    e.handle(
-        Event::MissionAssignRequested {
-            mission_id: "m-1".into(),
-            docs: parts.iter().map(|p| p.doc.clone()).collect(),
-        },
-        30,
-    )
-    .expect("assigned");
+    let (mut e, parts) = assigned();
     let t = drive(
         &mut e,
         &[
