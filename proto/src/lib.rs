@@ -10,6 +10,7 @@ pub mod correction;
 pub mod error;
 pub mod keys;
 pub mod listing;
+pub mod live;
 pub mod mission;
 pub mod plan;
 pub mod ros;
@@ -24,6 +25,7 @@ pub use attribute::{AttributeBlobDoc, AttributeDoc};
 pub use correction::{CorrectionDoc, CorrectionError, CorrectionReason};
 pub use error::CodecError;
 pub use listing::{OccupancyGridDoc, PLAN_PAGE_DEFAULT, PLAN_PAGE_MAX, PlanList, PlanListQuery, SiteList};
+pub use live::{LIVE_POINTS_DEFAULT, LIVE_POINTS_MAX, LivePoints, LivePointsQuery, RobotsUpdate, SiteChanged};
 pub use mission::{
     MissionAccepted, MissionCoverage, MissionPlanView, MissionRequest, MissionRobot, MissionStatus, MissionView,
 };

@@ -7,6 +7,7 @@ pub mod bench;
 pub mod fleet;
 pub mod path;
 pub mod raw;
+pub mod sse;
 
 use std::path::{Path, PathBuf};
 use std::time::Duration;

@@ -1,12 +1,12 @@
 //! The read model: what HTTP handlers answer from without asking the engine thread. Only the engine thread
 //! writes it (after the store committed), handlers take short read locks and clone `Arc`s.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::{BTreeMap, HashMap, VecDeque};
 use std::sync::{Arc, RwLock};
 
 use shift_engine::{CoverageKey, CoverageRecord, PlanRecord};
 use shift_planner::map::OccupancyGrid;
-use shift_proto::{MissionView, PlanDocument, PlanStatus, PlanStatusResponse, RegionReady, RobotView, SiteSummary};
+use shift_proto::{CorrectionDoc, MissionView, PlanDocument, PlanStatus, PlanStatusResponse, RegionReady, RobotView, SiteSummary};
 
 /// One plan as the API shows it.
 #[derive(Debug, Clone)]
@@ -16,6 +16,9 @@ pub struct PlanView {
     /// The current plan document once computed.
     pub doc: Option<Arc<PlanDocument>>,
 }
+
+/// Corrections kept per plan for `GET /v1/plans/{id}/corrections`.
+pub const CORRECTIONS_KEPT: usize = 200;
 
 /// Snapshots of plans and sites.
 #[derive(Debug, Default)]
@@ -30,6 +33,9 @@ pub struct Views {
     missions: RwLock<HashMap<String, MissionView>>,
     /// Each site's measured coverage raster, as the engine last sent it (about once a second while robots sweep).
     coverage: RwLock<HashMap<String, Arc<CoverageRecord>>>,
+    /// The corrections that made each plan's current document, oldest first (at most [`CORRECTIONS_KEPT`]),
+    /// so a page that opens late can draw where the path was replaced.
+    corrections: RwLock<HashMap<String, VecDeque<Arc<CorrectionDoc>>>>,
     /// Why the store does not write now (`/readyz` tells).
     store_fault: RwLock<Option<crate::store::fault::StoreError>>,
 }
@@ -130,6 +136,7 @@ impl Views {
 
     /// Forgets a plan (`retain_plans`): the API answers 404 for it after.
     pub fn forget_plan(&self, plan_id: &str) {
+        self.clear_corrections(plan_id);
         if let Ok(mut plans) = self.plans.write() {
             plans.remove(plan_id);
         }
@@ -144,6 +151,33 @@ impl Views {
             && let Some(v) = plans.get_mut(plan_id)
         {
             v.doc = Some(doc);
+        }
+    }
+
+    /// Keeps a correction of a plan (the oldest goes past [`CORRECTIONS_KEPT`]).
+    pub fn push_correction(&self, correction: &CorrectionDoc) {
+        if let Ok(mut c) = self.corrections.write() {
+            let kept = c.entry(correction.plan_id.clone()).or_default();
+            if kept.len() == CORRECTIONS_KEPT {
+                kept.pop_front();
+            }
+            kept.push_back(Arc::new(correction.clone()));
+        }
+    }
+
+    /// A plan's corrections, oldest first.
+    pub fn corrections(&self, plan_id: &str) -> Vec<Arc<CorrectionDoc>> {
+        self.corrections
+            .read()
+            .ok()
+            .and_then(|c| c.get(plan_id).map(|k| k.iter().cloned().collect()))
+            .unwrap_or_default()
+    }
+
+    /// Drops a plan's corrections (a replan replaced its document: they patched a line no longer driven).
+    pub fn clear_corrections(&self, plan_id: &str) {
+        if let Ok(mut c) = self.corrections.write() {
+            c.remove(plan_id);
         }
     }
 

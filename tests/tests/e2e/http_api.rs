@@ -4,12 +4,12 @@ use std::path::Path;
 use std::time::Duration;
 
 use anyhow::{Context, Result};
-use futures_util::StreamExt;
 use serde_json::{Value, json};
 use shift_planner::geom::Point2;
 use shift_planner::map::load_ros_map;
 use shift_planner::metrics::evaluate;
 use shift_planner::space::{CoverageSpace, RobotShape};
+use shift_tests::sse::SseReader;
 use shift_tests::{TestServer, demo_request, test_config};
 
 const FIXTURE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/four-rooms-obstacles");
@@ -51,40 +51,8 @@ async fn read_events(
     plan_id: &str,
     stop: impl Fn(&str, &Value) -> bool,
 ) -> Result<Vec<(String, Value)>> {
-    let r = server
-        .http
-        .get(server.url(&format!("/v1/plans/{plan_id}/events")))
-        .send()
-        .await?;
-    assert_eq!(r.status().as_u16(), 200);
-    let mut stream = r.bytes_stream();
-    let mut buf = String::new();
-    let mut out = Vec::new();
-    while let Some(chunk) = tokio::time::timeout(LONG, stream.next()).await? {
-        buf.push_str(&String::from_utf8_lossy(&chunk?));
-        while let Some(end) = buf.find("\n\n") {
-            let block: String = buf.drain(..end + 2).collect();
-            let mut name = String::new();
-            let mut data = String::new();
-            for line in block.lines() {
-                if let Some(v) = line.strip_prefix("event:") {
-                    name = v.trim().to_owned();
-                } else if let Some(v) = line.strip_prefix("data:") {
-                    data.push_str(v.trim());
-                }
-            }
-            if name.is_empty() {
-                continue; // keep-alive comment
-            }
-            let value: Value = serde_json::from_str(&data)?;
-            let done = stop(&name, &value);
-            out.push((name, value));
-            if done {
-                return Ok(out);
-            }
-        }
-    }
-    Ok(out)
+    let url = server.url(&format!("/v1/plans/{plan_id}/events"));
+    SseReader::open(&server.http, &url).await?.until(LONG, stop).await
 }
 
 fn fixture_space() -> Result<CoverageSpace> {

@@ -3,6 +3,7 @@
 
 mod architecture;
 mod corrections;
+mod dashboard_api;
 mod door;
 mod fleet_engine;
 mod fleet_ros2;

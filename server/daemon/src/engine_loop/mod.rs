@@ -233,6 +233,7 @@ impl EngineLoop {
                     self.plans_changed = true;
                     p.views.set_record(record.clone());
                     p.views.set_doc(&record.plan_id, doc);
+                    p.views.clear_corrections(&record.plan_id);
                     reply.plans.push(record);
                 }
                 Command::MissionChanged(view) => {
@@ -295,6 +296,7 @@ impl EngineLoop {
                 Command::Publish(event) => {
                     match &event {
                         PlanEvent::RegionReady { plan_id, region } => p.views.push_region(plan_id, region.clone()),
+                        PlanEvent::Correction(correction) => p.views.push_correction(correction),
                         PlanEvent::Status(status) => {
                             if let Some(publisher) = &p.publisher {
                                 publisher.status(status.clone());

@@ -97,7 +97,7 @@ fn parse_query(raw: &str) -> Result<PlanListQuery, ApiError> {
 }
 
 /// `a=1&b=x%20y` → pairs, percent- and plus-decoded.
-fn query_pairs(raw: &str) -> Result<Vec<(String, String)>, ApiError> {
+pub(super) fn query_pairs(raw: &str) -> Result<Vec<(String, String)>, ApiError> {
     let mut out = Vec::new();
     for part in raw.split('&').filter(|p| !p.is_empty()) {
         let (k, v) = part.split_once('=').unwrap_or((part, ""));

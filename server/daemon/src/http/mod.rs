@@ -7,16 +7,19 @@
 //! `Content-Length` over it is refused before the body is read, a chunked body is cut at it).
 
 mod auth;
+mod dashboard;
 pub mod error;
 mod events;
 mod json_errors;
 mod listings;
+mod live;
 mod missions;
 mod openapi;
 mod ops;
 mod plans;
 mod robots;
 pub mod serve;
+mod site_events;
 mod sites;
 pub mod stall;
 pub mod token;
@@ -104,6 +107,8 @@ pub fn router(state: AppState) -> Router {
         .route("/v1/plans/{id}", get(plans::get_plan).delete(plans::cancel_plan))
         .route("/v1/plans/{id}/path", get(plans::get_path))
         .route("/v1/plans/{id}/speed-profile", get(plans::get_speed_profile))
+        .route("/v1/plans/{id}/corrections", get(plans::get_corrections))
+        .route("/v1/sites/{site}/live", get(live::get_live))
         .route(
             "/v1/plans/{id}/assign",
             limited(post(robots::assign_plan), state.body_limits.request_bytes),
@@ -132,6 +137,7 @@ pub fn router(state: AppState) -> Router {
         // Event streams live long: no timeout (a reader that stops reading is cut by `serve`'s write stall).
         .route("/v1/plans/{id}/events", get(events::plan_events))
         .route("/v1/missions/{id}/events", get(missions::mission_events))
+        .route("/v1/sites/{site}/events", get(site_events::site_events))
         .route_layer(axum::middleware::from_fn_with_state(
             state.auth_token.clone(),
             auth::require_token,
@@ -143,6 +149,9 @@ pub fn router(state: AppState) -> Router {
         .route("/metrics", get(ops::metrics_text))
         .route("/openapi.json", get(openapi::openapi_json))
         .route("/docs", get(openapi::docs_page))
+        // The operator's page: static, embedded, open (its API calls carry the token where one is needed).
+        .route("/", get(dashboard::index))
+        .route("/dashboard/{file}", get(dashboard::file))
         .fallback(|| async { error::ApiError::not_found("no such route") })
         .layer(axum::middleware::from_fn(ops::track))
         // The routes' own limits decide; this is the backstop of any body-reading route without one.

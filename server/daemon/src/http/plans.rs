@@ -1,10 +1,10 @@
-//! Plan routes: create, status, path, speed profile, cancel.
+//! Plan routes: create, status, path, speed profile, corrections, cancel.
 
 use axum::extract::{Path, State};
 use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
 use shift_engine::Event;
 use shift_proto::{
-    ErrorBody, PlanAccepted, PlanDocument, PlanRequest, PlanStatusResponse, SpeedProfileResponse, SpeedSample,
+    CorrectionDoc, ErrorBody, PlanAccepted, PlanDocument, PlanRequest, PlanStatusResponse, SpeedProfileResponse, SpeedSample,
 };
 
 use super::AppState;
@@ -125,6 +125,20 @@ pub async fn get_speed_profile(
         version: doc.version,
         samples,
     }))
+}
+
+/// The corrections that made the plan's current document, oldest first (the last 200; a replan of a mission
+/// starts a new line and drops them). Each replaced `waypoints[from..to)` of `base_version`.
+#[utoipa::path(get, path = "/v1/plans/{id}/corrections", tag = "plans", params(("id" = String, Path)),
+    responses((status = 200, body = [CorrectionDoc]), (status = 404, body = ErrorBody)))]
+pub async fn get_corrections(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+) -> Result<ApiJson<Vec<CorrectionDoc>>, ApiError> {
+    view(&state, &id)?;
+    Ok(ApiJson(
+        state.views.corrections(&id).iter().map(|c| (**c).clone()).collect(),
+    ))
 }
 
 /// Cancel a queued or planning plan (409 once it finished).

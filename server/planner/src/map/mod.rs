@@ -1,6 +1,7 @@
 //! Maps: occupancy grids, their loaders, distance fields, and the live ikd-tree.
 
 pub mod distance;
+pub mod field;
 pub mod grid;
 pub mod ikd_tree;
 pub mod json_grid;
@@ -8,6 +9,7 @@ pub mod obstacle;
 pub mod ros;
 
 pub use distance::DistanceField;
+pub use field::{FieldRings, Ring};
 pub use grid::{Cell, CellState, GridGeometry, OccupancyGrid, Thresholds};
 pub use ikd_tree::{IkdParams, IkdTree};
 pub use json_grid::JsonGrid;
