@@ -24,8 +24,13 @@
 //! Loading LAS/LAZ/PLY/PCD files (units, classification) belongs to the daemon; this module takes points.
 
 pub mod curvature;
+pub mod fill;
 pub mod grid;
 pub mod plane;
+pub mod smooth;
+pub mod surface;
 
 pub use curvature::{CurvatureMap, Derivatives, FundamentalForms};
 pub use grid::{ElevationGrid, GridParams};
+pub use smooth::{CurvatureThresholds, SmoothParams, SmoothReport};
+pub use surface::{SurfaceReport, TerrainSurface};
