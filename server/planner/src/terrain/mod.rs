@@ -26,11 +26,66 @@
 pub mod curvature;
 pub mod fill;
 pub mod grid;
+pub mod mesh;
 pub mod plane;
 pub mod smooth;
 pub mod surface;
+pub mod traverse;
 
 pub use curvature::{CurvatureMap, Derivatives, FundamentalForms};
 pub use grid::{ElevationGrid, GridParams};
+pub use mesh::TerrainMesh;
 pub use smooth::{CurvatureThresholds, SmoothParams, SmoothReport};
 pub use surface::{SurfaceReport, TerrainSurface};
+pub use traverse::{GroundLimits, Traversability};
+
+use crate::error::Result;
+use crate::map::OccupancyGrid;
+
+/// How a cloud becomes a surface.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct TerrainParams {
+    /// Gridding.
+    pub grid: GridParams,
+    /// Protrusion removal.
+    pub smooth: SmoothParams,
+}
+
+/// Grids a cloud and runs §IV.A on it: the smoothed, gap-free elevation map.
+pub fn extract_surface(points: &[[f64; 3]], params: &TerrainParams) -> Result<(TerrainSurface, SurfaceReport)> {
+    let grid = ElevationGrid::from_points(points, &params.grid)?;
+    TerrainSurface::extract(&grid, &params.smooth)
+}
+
+/// What a ground robot may drive on, and everything made on the way.
+#[derive(Debug)]
+pub struct GroundOutcome {
+    /// The smoothed elevation map.
+    pub surface: TerrainSurface,
+    /// What smoothing and filling did.
+    pub report: SurfaceReport,
+    /// Slope, step and roughness per cell.
+    pub traversability: Traversability,
+    /// Occupied over a limit, unknown where filled farther than `max_fill_m` from data, free elsewhere.
+    pub occupancy: OccupancyGrid,
+}
+
+/// Cloud → smoothed surface → traversability → occupancy grid for the coverage pipeline. `max_fill_m`:
+/// interpolated ground farther than this from any data is unknown.
+pub fn ground_occupancy(
+    points: &[[f64; 3]],
+    terrain: &TerrainParams,
+    limits: &GroundLimits,
+    max_fill_m: f64,
+) -> Result<GroundOutcome> {
+    limits.validate()?;
+    let (surface, report) = extract_surface(points, terrain)?;
+    let traversability = Traversability::new(&surface, limits)?;
+    let occupancy = traversability.occupancy(&surface, limits, max_fill_m)?;
+    Ok(GroundOutcome {
+        surface,
+        report,
+        traversability,
+        occupancy,
+    })
+}
