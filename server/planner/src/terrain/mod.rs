@@ -24,17 +24,23 @@
 //! Loading LAS/LAZ/PLY/PCD files (units, classification) belongs to the daemon; this module takes points.
 
 pub mod curvature;
+pub mod drone;
+pub mod drone_metrics;
 pub mod fill;
 pub mod grid;
 pub mod mesh;
 pub mod plane;
+pub mod profile;
 pub mod smooth;
 pub mod surface;
 pub mod traverse;
 
 pub use curvature::{CurvatureMap, Derivatives, FundamentalForms};
+pub use drone::{DroneParams, DronePlan, LaneChoice, plan_lanes};
+pub use drone_metrics::{DroneMetrics, Quantiles, drone_metrics};
 pub use grid::{ElevationGrid, GridParams};
 pub use mesh::TerrainMesh;
+pub use profile::LaneAxis;
 pub use smooth::{CurvatureThresholds, SmoothParams, SmoothReport};
 pub use surface::{SurfaceReport, TerrainSurface};
 pub use traverse::{GroundLimits, Traversability};
@@ -55,6 +61,34 @@ pub struct TerrainParams {
 pub fn extract_surface(points: &[[f64; 3]], params: &TerrainParams) -> Result<(TerrainSurface, SurfaceReport)> {
     let grid = ElevationGrid::from_points(points, &params.grid)?;
     TerrainSurface::extract(&grid, &params.smooth)
+}
+
+/// A drone plan over a cloud and everything made on the way.
+#[derive(Debug)]
+pub struct DroneOutcome {
+    /// The smoothed elevation map.
+    pub surface: TerrainSurface,
+    /// What smoothing and filling did.
+    pub report: SurfaceReport,
+    /// The plan: lanes and the 3-D path.
+    pub plan: DronePlan,
+    /// Its metrics.
+    pub metrics: DroneMetrics,
+}
+
+/// §IV.A–B end to end: cloud → smoothed surface → drone lanes and 3-D waypoints → metrics.
+pub fn plan_drone(points: &[[f64; 3]], terrain: &TerrainParams, drone: &DroneParams) -> Result<DroneOutcome> {
+    drone.validate()?;
+    let (surface, report) = extract_surface(points, terrain)?;
+    let plan = plan_lanes(&surface, drone)?;
+    let mesh = TerrainMesh::new(&surface)?;
+    let metrics = drone_metrics(&surface, &mesh, &plan);
+    Ok(DroneOutcome {
+        surface,
+        report,
+        plan,
+        metrics,
+    })
 }
 
 /// What a ground robot may drive on, and everything made on the way.
@@ -89,3 +123,7 @@ pub fn ground_occupancy(
         occupancy,
     })
 }
+
+#[cfg(test)]
+#[path = "tests.rs"]
+mod tests;
