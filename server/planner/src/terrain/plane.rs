@@ -11,6 +11,8 @@ pub struct PlaneFit {
     pub gradient: [f64; 2],
     /// Root mean square of the unweighted residuals z − plane, metres.
     pub rms_residual: f64,
+    /// False when the support was too thin for a plane and the weighted mean was taken instead.
+    pub planar: bool,
 }
 
 impl PlaneFit {
@@ -43,16 +45,13 @@ pub fn fit_plane(samples: &[[f64; 4]]) -> Option<PlaneFit> {
     }
     let det = sxx * syy - sxy * sxy;
     let scale = (sxx + syy).powi(2);
-    let (b, c) = if samples.len() >= 3 && det > 1e-9 * scale && scale > 0.0 {
+    let solved = if samples.len() >= 3 && det > 1e-9 * scale && scale > 0.0 {
         let m = Matrix3::new(sw, 0.0, 0.0, 0.0, sxx, sxy, 0.0, sxy, syy);
-        let rhs = Vector3::new(0.0, sxz, syz);
-        match m.lu().solve(&rhs) {
-            Some(sol) => (sol[1], sol[2]),
-            None => (0.0, 0.0),
-        }
+        m.lu().solve(&Vector3::new(0.0, sxz, syz)).map(|sol| (sol[1], sol[2]))
     } else {
-        (0.0, 0.0)
+        None
     };
+    let (b, c) = solved.unwrap_or((0.0, 0.0));
     let height = mz - b * mx - c * my;
     let rss: f64 = samples
         .iter()
@@ -62,6 +61,7 @@ pub fn fit_plane(samples: &[[f64; 4]]) -> Option<PlaneFit> {
         height,
         gradient: [b, c],
         rms_residual: (rss / samples.len() as f64).sqrt(),
+        planar: solved.is_some(),
     })
 }
 
@@ -81,7 +81,7 @@ mod tests {
         let f = fit_plane(&s).expect("fit");
         assert!((f.height - 2.0).abs() < 1e-12);
         assert!((f.gradient[0] - 0.25).abs() < 1e-12 && (f.gradient[1] + 0.5).abs() < 1e-12);
-        assert!(f.rms_residual < 1e-12);
+        assert!(f.rms_residual < 1e-12 && f.planar);
         assert!((f.slope_rad() - 0.3125f64.sqrt().atan()).abs() < 1e-12);
         // ±0.1 m alternating noise: the residual RMS is 0.1 m.
         for (k, p) in s.iter_mut().enumerate() {
@@ -98,6 +98,7 @@ mod tests {
         let line = [[0.0, 0.0, 1.0, 1.0], [1.0, 0.0, 2.0, 1.0], [2.0, 0.0, 3.0, 1.0]];
         let f = fit_plane(&line).expect("fit");
         assert_eq!(f.gradient, [0.0, 0.0]);
+        assert!(!f.planar);
         assert!((f.height - 2.0).abs() < 1e-12);
     }
 }
