@@ -83,6 +83,36 @@ pub enum PlannerError {
         /// Robot radius in metres.
         radius_m: f64,
     },
+    /// A terrain point cloud with no finite point left to grid.
+    #[error("terrain cloud has no finite point: {skipped} of {total} points were NaN or infinite")]
+    EmptyCloud {
+        /// Points given.
+        total: usize,
+        /// Points skipped for a NaN or infinite coordinate.
+        skipped: usize,
+    },
+    /// A terrain height field too small for the curvature and slope stencils (3 × 3 cells).
+    #[error("terrain {field} of {width} × {height} cells is too small: at least {min} × {min} cells are needed")]
+    TerrainTooSmall {
+        /// Which input (e.g. `"elevation grid"`).
+        field: &'static str,
+        /// Width in cells.
+        width: usize,
+        /// Height in cells.
+        height: usize,
+        /// The smallest side accepted, cells.
+        min: usize,
+    },
+    /// A terrain input that would need more of something than the planner allows.
+    #[error("terrain {field}: {needed} is over the limit of {limit}")]
+    TerrainTooLarge {
+        /// Which quantity (e.g. `"waypoints"`).
+        field: &'static str,
+        /// How many the input needs.
+        needed: usize,
+        /// The limit.
+        limit: usize,
+    },
     /// The caller asked the planner to stop.
     #[error("planning was cancelled")]
     Cancelled,

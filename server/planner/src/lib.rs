@@ -8,7 +8,8 @@
 //! `decompose` (regions) → `pattern` (lanes, spiral, boundary passes) → `order` (visiting order) →
 //! `link` (transits) → `metrics` (DESIGN §6); then `smooth` (B-spline corners) and `speed` (RFICP speed
 //! profile and times) post-process the finished path. While a robot drives, `correct` judges the plan ahead
-//! of it against the live map and repairs the stretches that lost clearance (IKD-SWOpt).
+//! of it against the live map and repairs the stretches that lost clearance (IKD-SWOpt). [`terrain`] turns
+//! point clouds into smoothed surfaces (seed 000 §IV.A–B): occupancy for ground robots, 3-D lanes for drones.
 
 pub mod baseline;
 pub mod correct;
@@ -26,6 +27,7 @@ pub mod remainder;
 pub mod smooth;
 pub mod space;
 pub mod speed;
+pub mod terrain;
 pub mod testing;
 
 pub use error::{PlannerError, Result};
