@@ -460,6 +460,13 @@ pub struct SiteSummary {
     /// Remarks from reading the map.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
+    /// For a site uploaded as a field: its map frame as a PROJ string (a transverse Mercator on WGS84 centred on
+    /// `origin_wgs84`, metres).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub crs: Option<String>,
+    /// For a site uploaded as a field: the map frame's (0, 0), `[lon, lat]` degrees.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub origin_wgs84: Option<[f64; 2]>,
 }
 
 /// Server-sent event of `GET /v1/plans/{id}/events`; the SSE `event:` name is [`PlanEvent::name`].

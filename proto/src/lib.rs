@@ -8,6 +8,7 @@ pub mod api;
 pub mod attribute;
 pub mod correction;
 pub mod error;
+pub mod field;
 pub mod keys;
 pub mod listing;
 pub mod live;
@@ -24,6 +25,7 @@ pub use api::{
 pub use attribute::{AttributeBlobDoc, AttributeDoc};
 pub use correction::{CorrectionDoc, CorrectionError, CorrectionReason};
 pub use error::CodecError;
+pub use field::{FieldRequest, GeoReference};
 pub use listing::{OccupancyGridDoc, PLAN_PAGE_DEFAULT, PLAN_PAGE_MAX, PlanList, PlanListQuery, SiteList};
 pub use live::{LIVE_POINTS_DEFAULT, LIVE_POINTS_MAX, LivePoints, LivePointsQuery, RobotsUpdate, SiteChanged};
 pub use mission::{

@@ -4,6 +4,7 @@
 //! HTTP like a fleet backend would. This library holds the harness; the tests are in `tests/`.
 
 pub mod bench;
+pub mod field;
 pub mod fleet;
 pub mod path;
 pub mod raw;

@@ -43,6 +43,7 @@
 
 mod client;
 mod error;
+mod fields;
 mod missions;
 mod plans;
 pub mod robot;

@@ -16,6 +16,7 @@ pub mod cell_mask;
 pub mod coverage;
 mod engine;
 pub mod error;
+pub mod field;
 pub mod job;
 pub mod live_map;
 pub mod live_maps;

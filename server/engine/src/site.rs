@@ -10,7 +10,7 @@ use shift_planner::map::DistanceField;
 use shift_planner::map::grid::OccupancyGrid;
 use shift_planner::map::json_grid::JsonGrid;
 use shift_planner::map::ros::{MapYaml, grid_from_image};
-use shift_proto::SiteSummary;
+use shift_proto::{FieldRequest, GeoReference, SiteSummary};
 
 use crate::error::{EngineError, Result};
 
@@ -31,6 +31,11 @@ pub enum MapSource {
         /// JSON text.
         text: String,
     },
+    /// A field drawn in GeoJSON (`POST /v1/sites/{site}/field`).
+    Field {
+        /// The upload as sent.
+        request: FieldRequest,
+    },
 }
 
 /// A parsed site map.
@@ -43,6 +48,8 @@ pub struct SiteMap {
     pub clearance: Arc<DistanceField>,
     /// Remarks from reading it.
     pub warnings: Vec<String>,
+    /// Where its frame lies on the earth (fields only).
+    pub georef: Option<GeoReference>,
 }
 
 impl SiteMap {
@@ -53,6 +60,7 @@ impl SiteMap {
             grid: Arc::new(grid),
             clearance: Arc::new(clearance),
             warnings,
+            georef: None,
         }
     }
 }
@@ -70,6 +78,12 @@ impl MapSource {
             Self::Json { text } => {
                 let grid = JsonGrid::parse(text)?.into_grid()?;
                 Ok(SiteMap::new(grid, Vec::new()))
+            }
+            Self::Field { request } => {
+                let field = crate::field::load(request)?;
+                let mut map = SiteMap::new(field.grid, field.warnings);
+                map.georef = Some(field.georef);
+                Ok(map)
             }
         }
     }
@@ -151,6 +165,8 @@ impl Site {
             dropped_clouds: 0,
             updated_ms: self.record.updated_ms,
             warnings: self.map.warnings.clone(),
+            crs: self.map.georef.as_ref().map(|g| g.crs.clone()),
+            origin_wgs84: self.map.georef.as_ref().map(|g| g.origin_wgs84),
         }
     }
 }

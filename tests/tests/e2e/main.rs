@@ -5,6 +5,7 @@ mod architecture;
 mod corrections;
 mod dashboard_api;
 mod door;
+mod fields;
 mod fleet_engine;
 mod fleet_ros2;
 mod fleet_zenoh;

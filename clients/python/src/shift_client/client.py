@@ -6,7 +6,7 @@ import re
 import time
 from urllib.parse import quote
 from pathlib import Path
-from typing import Any, Generic, Iterator, List, Optional, TypeVar, Union
+from typing import Any, Dict, Generic, Iterator, List, Mapping, Optional, TypeVar, Union
 
 import httpx
 
@@ -183,6 +183,27 @@ class Client:
         """``POST /v1/sites/{site}/map`` with a JSON grid (nav_msgs/OccupancyGrid-like). Returns the summary."""
         return SiteSummary.from_json(self._request("POST", f"/v1/sites/{_seg(site)}/map", json=grid.to_json()))
 
+    def upload_field(
+        self,
+        site: str,
+        field: Mapping[str, Any],
+        *,
+        no_go: Optional[List[Mapping[str, Any]]] = None,
+        tool_width: Optional[float] = None,
+        resolution_m: Optional[float] = None,
+    ) -> SiteSummary:
+        """``POST /v1/sites/{site}/field`` with a GeoJSON field (Polygon, MultiPolygon, Feature or
+        FeatureCollection in ``[lon, lat]`` degrees; holes and ``no_go`` polygons are obstacles). The site's map
+        frame is a transverse Mercator centred on the field: the summary names it (``crs``, ``origin_wgs84``)."""
+        body: Dict[str, Any] = {"field": dict(field)}
+        if no_go:
+            body["no_go"] = [dict(p) for p in no_go]
+        if tool_width is not None:
+            body["tool_width"] = float(tool_width)
+        if resolution_m is not None:
+            body["resolution_m"] = float(resolution_m)
+        return SiteSummary.from_json(self._request("POST", f"/v1/sites/{_seg(site)}/field", json=body))
+
     def get_site(self, site: str) -> SiteSummary:
         """``GET /v1/sites/{site}``: size, resolution, free cells, points in the live map."""
         return SiteSummary.from_json(self._request("GET", f"/v1/sites/{_seg(site)}"))
@@ -229,6 +250,11 @@ class Client:
         """``GET /v1/plans/{id}/path``: the plan document, current version with every correction applied (409
         ``not_ready`` while it is computed)."""
         return PlanDocument.from_json(self._request("GET", f"/v1/plans/{_seg(plan_id)}/path"))
+
+    def get_path_geojson(self, plan_id: str) -> Dict[str, Any]:
+        """``GET /v1/plans/{id}/path?crs=wgs84``: the path of a plan on a field site as a GeoJSON Feature whose
+        LineString holds ``[lon, lat]``, with the waypoints' ``v``, ``t`` and ``kind`` as properties."""
+        return dict(self._request("GET", f"/v1/plans/{_seg(plan_id)}/path", params={"crs": "wgs84"}))
 
     def get_speed_profile(self, plan_id: str) -> SpeedProfile:
         """``GET /v1/plans/{id}/speed-profile``: per waypoint arc length (m), speed (m/s), time (s)."""

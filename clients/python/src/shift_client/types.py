@@ -307,18 +307,20 @@ class PlanRequest:
     blobs, a polygon to cover inside of, and planner options."""
 
     site: str
-    start: Point2
+    start: Optional[Point2]
     robot: RobotSpec
     attribute: Optional[List[AttributeBlob]] = None
     region: Optional[List[Point2]] = None
     options: Optional[PlanOptions] = None
+    #: ``(lon, lat)`` degrees instead of ``start``, on a site uploaded as a field (``Client.upload_field``).
+    start_wgs84: Optional[Point2] = None
 
     def to_json(self) -> Dict[str, Any]:
-        out: Dict[str, Any] = {
-            "site": self.site,
-            "start": [float(self.start[0]), float(self.start[1])],
-            "robot": self.robot.to_json(),
-        }
+        out: Dict[str, Any] = {"site": self.site, "robot": self.robot.to_json()}
+        if self.start is not None:
+            out["start"] = [float(self.start[0]), float(self.start[1])]
+        if self.start_wgs84 is not None:
+            out["start_wgs84"] = [float(self.start_wgs84[0]), float(self.start_wgs84[1])]
         if self.attribute is not None:
             out["attribute"] = _blobs_json(self.attribute)
         if self.region is not None:
@@ -453,6 +455,9 @@ class SiteSummary:
     updates_per_s: float = 0.0
     dropped_clouds: int = 0
     warnings: List[str] = field(default_factory=list)
+    #: For a field site: its map frame as a PROJ string, and the frame's (0, 0) as ``(lon, lat)``.
+    crs: Optional[str] = None
+    origin_wgs84: Optional[Point2] = None
 
     @classmethod
     def from_json(cls, d: Mapping[str, Any]) -> "SiteSummary":
@@ -469,6 +474,10 @@ class SiteSummary:
             updates_per_s=float(d.get("updates_per_s", 0.0)),
             dropped_clouds=int(d.get("dropped_clouds", 0)),
             warnings=[str(w) for w in d.get("warnings", [])],
+            crs=str(d["crs"]) if d.get("crs") is not None else None,
+            origin_wgs84=(float(d["origin_wgs84"][0]), float(d["origin_wgs84"][1]))
+            if d.get("origin_wgs84") is not None
+            else None,
         )
 
 

@@ -10,6 +10,7 @@ mod auth;
 mod dashboard;
 pub mod error;
 mod events;
+mod field;
 mod json_errors;
 mod listings;
 mod live;
@@ -100,6 +101,10 @@ pub fn router(state: AppState) -> Router {
             limited(post(sites::upload_map), state.body_limits.map_bytes).get(listings::get_site_map),
         )
         .route("/v1/sites/{site}", get(sites::get_site))
+        .route(
+            "/v1/sites/{site}/field",
+            limited(post(field::upload_field), state.body_limits.map_bytes),
+        )
         .route(
             "/v1/plans",
             limited(post(plans::create_plan), state.body_limits.request_bytes).get(listings::list_plans),

@@ -12,6 +12,7 @@ use utoipa::OpenApi;
     paths(
         super::sites::upload_map,
         super::sites::get_site,
+        super::field::upload_field,
         super::listings::list_sites,
         super::listings::get_site_map,
         super::listings::list_plans,

@@ -1,10 +1,12 @@
 //! Plan routes: create, status, path, speed profile, corrections, cancel.
 
-use axum::extract::{Path, State};
+use axum::extract::{Path, RawQuery, State};
 use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
+use axum::response::{IntoResponse, Response};
 use shift_engine::Event;
 use shift_proto::{
-    CorrectionDoc, ErrorBody, PlanAccepted, PlanDocument, PlanRequest, PlanStatusResponse, SpeedProfileResponse, SpeedSample,
+    CorrectionDoc, ErrorBody, PlanAccepted, PlanDocument, PlanRequest, PlanStatusResponse, SpeedProfileResponse,
+    SpeedSample,
 };
 
 use super::AppState;
@@ -34,7 +36,8 @@ fn ready_doc(state: &AppState, plan_id: &str) -> Result<std::sync::Arc<PlanDocum
 
 /// Ask for a plan. Answers 202 at once, after the request is committed to the store; the job runs on the
 /// worker pool. Poll `GET /v1/plans/{id}` or follow `/events`. The whole request is checked before anything
-/// is stored (400 names the field); a full queue answers 429 with `Retry-After`.
+/// is stored (400 names the field); a full queue answers 429 with `Retry-After`. On a field site,
+/// `"start_wgs84": [lon, lat]` may stand for `start`.
 #[utoipa::path(post, path = "/v1/plans", tag = "plans", request_body = PlanRequest,
     responses((status = 202, body = PlanAccepted, headers(("Location" = String))),
         (status = 400, description = "invalid field (named in the message)", body = ErrorBody),
@@ -47,8 +50,12 @@ fn ready_doc(state: &AppState, plan_id: &str) -> Result<std::sync::Arc<PlanDocum
             headers(("Retry-After" = u64, description = "seconds to wait before asking again")))))]
 pub async fn create_plan(
     State(state): State<AppState>,
-    ApiJson(request): ApiJson<PlanRequest>,
+    ApiJson(mut body): ApiJson<serde_json::Value>,
 ) -> Result<(StatusCode, HeaderMap, ApiJson<PlanAccepted>), ApiError> {
+    // A start in lon/lat becomes the map-frame start before the request is read (a field site's frame).
+    super::field::resolve_start_wgs84(&state, &mut body)?;
+    let bytes = serde_json::to_vec(&body).map_err(|e| ApiError::bad_request(e.to_string()))?;
+    let axum::Json(request): axum::Json<PlanRequest> = axum::Json::from_bytes(&bytes)?;
     let reply = state
         .engine
         .call(Event::PlanRequested { request })
@@ -86,16 +93,32 @@ pub async fn get_plan(
     Ok(ApiJson(view(&state, &id)?.record.to_response()))
 }
 
-/// The plan document (DESIGN §5.1), current version.
-#[utoipa::path(get, path = "/v1/plans/{id}/path", tag = "plans", params(("id" = String, Path)),
-    responses((status = 200, body = PlanDocument), (status = 404, body = ErrorBody),
+/// The plan document (DESIGN §5.1), current version. With `?crs=wgs84` (a plan on a field site): a GeoJSON
+/// Feature whose LineString holds `[lon, lat]`, with the waypoints' `v`, `t` and `kind` as properties.
+#[utoipa::path(get, path = "/v1/plans/{id}/path", tag = "plans",
+    params(("id" = String, Path), ("crs" = Option<String>, Query, description = "`wgs84`: GeoJSON in lon/lat")),
+    responses((status = 200, body = PlanDocument), (status = 400, body = ErrorBody), (status = 404, body = ErrorBody),
         (status = 409, description = "not computed yet", body = ErrorBody)))]
 pub async fn get_path(
     State(state): State<AppState>,
     Path(id): Path<String>,
-) -> Result<ApiJson<PlanDocument>, ApiError> {
+    RawQuery(raw): RawQuery,
+) -> Result<Response, ApiError> {
+    let mut wgs84 = false;
+    for (key, value) in super::listings::query_pairs(raw.as_deref().unwrap_or(""))? {
+        match (key.as_str(), value.as_str()) {
+            ("crs", "wgs84" | "WGS84" | "EPSG:4326") => wgs84 = true,
+            ("crs", "map") => wgs84 = false,
+            ("crs", other) => return Err(ApiError::bad_request(format!("crs: {other:?} is not wgs84 or map"))),
+            (other, _) => return Err(ApiError::bad_request(format!("{other}: unknown parameter (crs)"))),
+        }
+    }
     let doc = ready_doc(&state, &id)?;
-    Ok(ApiJson((*doc).clone()))
+    if wgs84 {
+        let site = view(&state, &id)?.record.request.site.clone();
+        return Ok(ApiJson(super::field::plan_geojson(&state, &site, &doc)?).into_response());
+    }
+    Ok(ApiJson((*doc).clone()).into_response())
 }
 
 /// Per waypoint: arc length s (m), speed v (m/s), time t (s).

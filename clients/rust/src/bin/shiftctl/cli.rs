@@ -76,6 +76,23 @@ pub enum SiteAction {
         #[arg(long)]
         yaml: PathBuf,
     },
+    /// Upload a field drawn in GeoJSON (lon/lat; holes are obstacles) as SITE.
+    Field {
+        /// Site name (letters, digits, '-', '_').
+        site: String,
+        /// A GeoJSON Polygon, MultiPolygon, Feature or FeatureCollection.
+        #[arg(long, value_name = "FILE")]
+        geojson: PathBuf,
+        /// A GeoJSON polygon not to enter (repeatable).
+        #[arg(long, value_name = "FILE")]
+        no_go: Vec<PathBuf>,
+        /// The tool width the site is planned for, metres (chooses the grid's resolution).
+        #[arg(long)]
+        tool_width: Option<f64>,
+        /// The grid's resolution, metres per cell.
+        #[arg(long)]
+        resolution_m: Option<f64>,
+    },
     /// A site's summary.
     Show {
         /// Site name.
@@ -94,8 +111,16 @@ pub struct PlanArgs {
     #[arg(long, required = true)]
     pub site: Option<String>,
     /// Start and return point X,Y (metres, map frame).
-    #[arg(long, required = true, value_name = "X,Y", allow_hyphen_values = true)]
+    #[arg(
+        long,
+        value_name = "X,Y",
+        allow_hyphen_values = true,
+        required_unless_present = "start_wgs84"
+    )]
     pub start: Option<String>,
+    /// Start and return point LON,LAT (degrees) on a site uploaded as a field, instead of --start.
+    #[arg(long, value_name = "LON,LAT", allow_hyphen_values = true, conflicts_with = "start")]
+    pub start_wgs84: Option<String>,
     /// Robot footprint radius, metres.
     #[arg(long, default_value_t = 0.15)]
     pub robot_radius: f64,
@@ -282,6 +307,18 @@ pub struct ExportArgs {
     /// Write here instead of stdout.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Coordinates of `--format geojson`: the map frame (metres), or wgs84 (lon/lat, plans on field sites).
+    #[arg(long, value_enum, default_value_t = Crs::Map)]
+    pub crs: Crs,
+}
+
+/// Coordinates of an export.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Crs {
+    /// Metres, the plan's map frame.
+    Map,
+    /// Longitude and latitude (GeoJSON's RFC 7946 CRS).
+    Wgs84,
 }
 
 /// `render`.

@@ -4,7 +4,7 @@ use std::path::Path;
 
 use anyhow::Context as _;
 use shift_client::Client;
-use shift_client::proto::{PlanListQuery, PlanRequest, RobotSpec};
+use shift_client::proto::{FieldRequest, PlanListQuery, PlanRequest, RobotSpec};
 
 use crate::cli::{PlanAction, PlanArgs, PlansArgs, SiteAction};
 use crate::input::{bad, planner, point, polygon, positive, status};
@@ -17,6 +17,24 @@ pub async fn site(client: &Client, action: SiteAction, json: bool) -> anyhow::Re
             let (text, image, name) = read_map(&yaml)?;
             client.upload_map(&site, text, image, &name).await?
         }
+        SiteAction::Field {
+            site,
+            geojson,
+            no_go,
+            tool_width,
+            resolution_m,
+        } => {
+            let request = FieldRequest {
+                field: read_geojson("--geojson", &geojson)?,
+                no_go: no_go
+                    .iter()
+                    .map(|p| read_geojson("--no-go", p))
+                    .collect::<anyhow::Result<_>>()?,
+                resolution_m,
+                tool_width,
+            };
+            client.upload_field(&site, &request).await?
+        }
         SiteAction::Show { site } => client.site(&site).await?,
     };
     if json {
@@ -28,6 +46,12 @@ pub async fn site(client: &Client, action: SiteAction, json: bool) -> anyhow::Re
 }
 
 /// Reads a map_server YAML and the image its `image` key names (relative to the YAML).
+/// A GeoJSON file, read as JSON (the daemon checks its shape and names what is wrong).
+fn read_geojson(flag: &str, path: &Path) -> anyhow::Result<serde_json::Value> {
+    let text = std::fs::read_to_string(path).map_err(|e| bad(format!("{flag} {}: {e}", path.display())))?;
+    serde_json::from_str(&text).map_err(|e| bad(format!("{flag} {}: not JSON: {e}", path.display())))
+}
+
 fn read_map(yaml_path: &Path) -> anyhow::Result<(String, Vec<u8>, String)> {
     let text = std::fs::read_to_string(yaml_path).map_err(|e| bad(format!("--yaml {}: {e}", yaml_path.display())))?;
     let doc: serde_yaml_ng::Value =
@@ -73,10 +97,12 @@ pub async fn plan(client: &Client, args: PlanArgs, json: bool) -> anyhow::Result
 
 fn request(args: &PlanArgs) -> anyhow::Result<PlanRequest> {
     let site = args.site.clone().ok_or_else(|| bad("--site is required"))?;
-    let start = point(
-        "--start",
-        args.start.as_deref().ok_or_else(|| bad("--start is required"))?,
-    )?;
+    // With --start-wgs84 the daemon fills the start in; this one is not sent.
+    let start = match (&args.start, &args.start_wgs84) {
+        (Some(s), _) => point("--start", s)?,
+        (None, Some(_)) => [0.0, 0.0],
+        (None, None) => return Err(bad("give --start X,Y or --start-wgs84 LON,LAT")),
+    };
     let region = args.region.as_deref().map(|r| polygon("--region", r)).transpose()?;
     for (name, v) in [
         ("--robot-radius", args.robot_radius),
@@ -108,7 +134,10 @@ fn request(args: &PlanArgs) -> anyhow::Result<PlanRequest> {
 
 async fn submit(client: &Client, args: PlanArgs, json: bool) -> anyhow::Result<()> {
     let req = request(&args)?;
-    let accepted = client.create_plan(&req).await?;
+    let accepted = match &args.start_wgs84 {
+        Some(ll) => client.create_plan_wgs84(&req, point("--start-wgs84", ll)?).await?,
+        None => client.create_plan(&req).await?,
+    };
     if args.watch {
         return watch::follow(client, &accepted.plan_id, json).await;
     }

@@ -11,17 +11,29 @@ use shift_client::proto::ros::geometry::Quaternion;
 use shift_client::proto::ros::path::plan_poses;
 use shift_client::proto::{PlanDocument, WaypointKindDoc};
 
-use crate::cli::{ExportArgs, Format};
+use crate::cli::{Crs, ExportArgs, Format};
 use crate::input::bad;
 
 /// Runs the command.
 pub async fn run(client: &Client, args: ExportArgs) -> anyhow::Result<()> {
+    if args.crs == Crs::Wgs84 {
+        if args.format != Format::Geojson {
+            return Err(bad("--crs wgs84 goes with --format geojson"));
+        }
+        let feature = client.path_geojson(&args.plan).await?;
+        return write(&args, &serde_json::to_string_pretty(&feature)?);
+    }
     let doc = client.path(&args.plan).await?;
     let text = match args.format {
         Format::Geojson => serde_json::to_string_pretty(&geojson(&doc))?,
         Format::Csv => csv(&doc),
         Format::NavPath => serde_json::to_string_pretty(&nav_path(&doc))?,
     };
+    write(&args, &text)
+}
+
+/// The text to `--out` or stdout.
+fn write(args: &ExportArgs, text: &str) -> anyhow::Result<()> {
     match &args.out {
         Some(path) => std::fs::write(path, text.as_bytes()).map_err(|e| bad(format!("--out {}: {e}", path.display()))),
         None => {
