@@ -1,11 +1,25 @@
 // What the operator does: upload a map, create a plan by clicking its start, assign it, cancel it. Every action
 // goes through `act`: a failure shows the API's message in the banner; a 401/403 asks for the token and retries.
 
-import { ApiError, api, del, errorsShown, get, getToken, hideError, post, seg, setToken, showError, toast } from "./api.js";
+import {
+  ApiError,
+  api,
+  del,
+  errorsShown,
+  get,
+  getToken,
+  hideError,
+  post,
+  seg,
+  setToken,
+  showError,
+  toast,
+} from "./api.js";
 import { $ } from "./dom.js";
 import { renderPlans } from "./panels.js";
 import { state } from "./store.js";
-import { loadSites, onStatus, refreshAllRobots, selectPlan, upsertPlan } from "./app.js";
+import { loadSites, onStatus, selectPlan, upsertPlan } from "./app.js";
+import { refreshAllRobots } from "./robots.js";
 
 let retryAfterToken = null;
 
@@ -99,7 +113,17 @@ export async function createPlanAt(x, y) {
       if (site !== state.site) return;
       const now = Date.now();
       if (!state.plans.has(accepted.plan_id)) {
-        upsertPlan({ plan_id: accepted.plan_id, site, status: accepted.status, progress: 0, version: 0, regions_ready: 0, corrections: 0, created_ms: now, updated_ms: now });
+        upsertPlan({
+          plan_id: accepted.plan_id,
+          site,
+          status: accepted.status,
+          progress: 0,
+          version: 0,
+          regions_ready: 0,
+          corrections: 0,
+          created_ms: now,
+          updated_ms: now,
+        });
       }
       renderPlans();
       await selectPlan(accepted.plan_id);

@@ -116,7 +116,9 @@ export function showError(e, what) {
   const banner = document.getElementById("error-banner");
   const msg = e instanceof ApiError ? e.message : e && e.message ? e.message : String(e);
   const detail =
-    e instanceof ApiError ? `${e.status ? e.status + " " : ""}${e.code}${e.path ? " · " + e.method + " " + e.path : ""}` : "";
+    e instanceof ApiError
+      ? `${e.status ? e.status + " " : ""}${e.code}${e.path ? " · " + e.method + " " + e.path : ""}`
+      : "";
   errorLog.push({ what: what || "", message: msg, status: e instanceof ApiError ? e.status : 0, at: Date.now() });
   if (errorLog.length > 50) errorLog.shift();
   if (!banner) return;

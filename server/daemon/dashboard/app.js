@@ -7,7 +7,6 @@
 
 import { ApiError, get, getToken, hideError, onTokenChange, seg, setToken, showError, toast } from "./api.js";
 import {
-  act,
   assignSelected,
   cancelSelected,
   cancelTokenDialog,
@@ -23,7 +22,6 @@ import { firstMapDrawn, installDebugHook } from "./debug.js";
 import { $, el } from "./dom.js";
 import { MapView } from "./map.js";
 import {
-  fillRobotChoices,
   renderLegend,
   renderMissions,
   renderPlan,
@@ -33,15 +31,15 @@ import {
   renderRobots,
   renderRobotsNow,
   renderSite,
-  robotLabel,
 } from "./panels.js";
+import { loadRobots, onRobots, pushDriven, refreshAllRobots, selectRobot } from "./robots.js";
 import { SiteStream, planStream, throttle } from "./sse.js";
-import { ACTIVE_DOCS_MAX, TRAIL_MAX, state } from "./store.js";
+import { ACTIVE_DOCS_MAX, state } from "./store.js";
 
 // --- small helpers ------------------------------------------------------------------------------------------
 
 /** Loads something for the page (not an operator action): errors shown, not thrown. */
-async function load(what, f) {
+export async function load(what, f) {
   try {
     return await f();
   } catch (e) {
@@ -272,7 +270,8 @@ export function onStatus(s) {
       state.planStream = null;
     }
   }
-  if (statusChanged || (p.missed && p.missed.length !== (before && before.missed ? before.missed.length : 0))) refreshOverlays();
+  const missedBefore = before && before.missed ? before.missed.length : 0;
+  if (statusChanged || (p.missed ? p.missed.length : 0) !== missedBefore) refreshOverlays();
   renderPlans();
   if (s.plan_id === state.selected) renderPlanSoon();
   renderRobots();
@@ -317,7 +316,8 @@ function onCorrection(c) {
   if (doc) {
     if (doc.version === c.base_version && c.from <= c.to && c.to <= doc.waypoints.length) {
       const after = doc.waypoints.slice(c.to).map((w) => ({ ...w, t: w.t + (c.dt_after_s || 0) }));
-      state.docs.set(c.plan_id, { ...doc, version: c.version, waypoints: [...doc.waypoints.slice(0, c.from), ...c.waypoints, ...after] });
+      const waypoints = [...doc.waypoints.slice(0, c.from), ...c.waypoints, ...after];
+      state.docs.set(c.plan_id, { ...doc, version: c.version, waypoints });
     } else if (doc.version < c.version) {
       docStale(c.plan_id);
     }
@@ -325,102 +325,10 @@ function onCorrection(c) {
   refreshOverlaysSoon();
   renderPlans();
   if (c.plan_id === state.selected) renderPlanSoon();
-  toast(`${c.robot}: ${c.reason} correction on ${c.plan_id} → v${c.version}`, c.reason === "skipped" ? "warn" : "info");
+  const kind = c.reason === "skipped" ? "warn" : "info";
+  toast(`${c.robot}: ${c.reason} correction on ${c.plan_id} → v${c.version}`, kind);
 }
 const refreshOverlaysSoon = throttle(() => refreshOverlays(), 100);
-
-// --- robots -------------------------------------------------------------------------------------------------
-
-async function loadRobots(gen) {
-  const list = await load("Load robots", () => get("/v1/robots"));
-  if (!list || gen !== state.gen) return;
-  state.allRobots = list;
-  const mine = list.filter((r) => r.site === state.site);
-  onRobots({ robots: mine });
-  fillRobotChoices();
-}
-
-function onRobots(e) {
-  for (const v of e.robots || []) {
-    if (v.site && state.site && v.site !== state.site) {
-      // It left this site (assigned elsewhere): drop it.
-      state.robots.delete(v.robot);
-      continue;
-    }
-    let r = state.robots.get(v.robot);
-    if (!r) {
-      r = { view: v, draw: { x: 0, y: 0, yaw: 0, alive: v.alive, trail: [], label: v.robot, selected: false } };
-      state.robots.set(v.robot, r);
-    }
-    r.view = v;
-    const d = r.draw;
-    d.alive = v.alive;
-    if (v.pose) {
-      const last = d.trail[d.trail.length - 1];
-      if (!last || Math.hypot(v.pose.x - last[0], v.pose.y - last[1]) > 0.02) {
-        d.trail.push([v.pose.x, v.pose.y]);
-        if (d.trail.length > TRAIL_MAX) d.trail.splice(0, d.trail.length - TRAIL_MAX);
-      }
-      d.x = v.pose.x;
-      d.y = v.pose.y;
-      d.yaw = v.pose.yaw;
-      d.hasPose = true;
-    }
-    d.label = robotLabel(v);
-    d.selected = v.robot === state.selectedRobot;
-    const p = v.plan_id ? state.plans.get(v.plan_id) : null;
-    if (p && v.driven_fraction !== undefined) p.driven_fraction = v.driven_fraction;
-  }
-  pushRobots();
-  pushDriven();
-  renderRobots();
-}
-
-/** The selected plan's driven part, from its robot's view (or the plan's status). */
-function pushDriven() {
-  const p = state.selected ? state.plans.get(state.selected) : null;
-  if (!p) return;
-  let f = p.driven_fraction;
-  for (const r of state.robots.values()) if (r.view.plan_id === p.plan_id && r.view.driven_fraction !== undefined) f = r.view.driven_fraction;
-  state.view.setDriven(f);
-}
-
-function pushRobots() {
-  const m = new Map();
-  for (const [id, r] of state.robots) if (r.draw.hasPose) m.set(id, r.draw);
-  state.view.setRobots(m);
-}
-
-export function selectRobot(id) {
-  state.selectedRobot = id === state.selectedRobot ? null : id;
-  for (const [rid, r] of state.robots) r.draw.selected = rid === state.selectedRobot;
-  const r = state.robots.get(id);
-  if (state.selectedRobot && r) {
-    if (r.draw.hasPose) state.view.centerOn(r.draw.x, r.draw.y);
-    if (r.view.plan_id && state.plans.has(r.view.plan_id) && r.view.plan_id !== state.selected) selectPlan(r.view.plan_id);
-  }
-  pushRobots();
-  renderRobotsNow();
-}
-
-export const refreshAllRobots = throttle(async () => {
-  const list = await get("/v1/robots").catch(() => null);
-  if (!list) return;
-  state.allRobots = list;
-  // Robots assigned elsewhere since: no longer on this site.
-  let gone = false;
-  for (const r of list) {
-    if (state.robots.has(r.robot) && r.site !== state.site) {
-      state.robots.delete(r.robot);
-      gone = true;
-    }
-  }
-  if (gone) {
-    pushRobots();
-    renderRobots();
-  }
-  fillRobotChoices();
-}, 1000);
 
 /** The site's figures (clouds/s, dropped, points) move on: read them again now and then. */
 async function refreshSummary() {
@@ -477,6 +385,13 @@ async function loadLive(gen) {
 const liveSoon = throttle(() => loadLive(state.gen), 1000);
 const coverageSoon = throttle(() => loadCoverage(state.gen), 1000);
 
+const STREAM_STATES = {
+  live: "live",
+  connecting: "connecting",
+  reconnecting: "reconnecting…",
+  closed: "stream closed",
+};
+
 function streamHandlers(gen) {
   const only = (f) => (d) => {
     if (gen === state.gen) f(d);
@@ -497,7 +412,7 @@ function streamHandlers(gen) {
     onState: (s) => {
       if (gen !== state.gen) return;
       const c = $("conn");
-      c.textContent = { live: "live", connecting: "connecting", reconnecting: "reconnecting…", closed: "stream closed" }[s] || s;
+      c.textContent = STREAM_STATES[s] || s;
       c.className = `pill ${s === "live" ? "pill-ok" : s === "closed" ? "pill-bad" : "pill-wait"}`;
     },
     onResync: only(() => {
@@ -508,10 +423,6 @@ function streamHandlers(gen) {
     }),
   };
 }
-
-// --- actions ------------------------------------------------------------------------------------------------
-
-// --- debug hook for tests -----------------------------------------------------------------------------------
 
 // --- wiring -------------------------------------------------------------------------------------------------
 
@@ -568,7 +479,8 @@ function wire() {
     box.addEventListener("change", () => state.view.setLayer(box.dataset.layer, box.checked));
   }
   window.addEventListener("keydown", (e) => {
-    if (e.target instanceof HTMLInputElement || e.target instanceof HTMLSelectElement || e.target instanceof HTMLTextAreaElement) return;
+    const t = e.target;
+    if (t instanceof HTMLInputElement || t instanceof HTMLSelectElement || t instanceof HTMLTextAreaElement) return;
     if (e.key === "Escape" && state.pick) stopPick();
     else if (e.key === "f" || e.key === "F") state.view.fit();
     else if (e.key === "+" || e.key === "=") state.view.zoomAt(state.view.cssW / 2, state.view.cssH / 2, 1.4);

@@ -28,7 +28,9 @@ export const fmt = {
   age(ms) {
     if (!ms) return "—";
     const s = Math.max(0, (Date.now() - ms) / 1000);
-    return s < 10 ? `${s.toFixed(1)} s` : s < 120 ? `${Math.round(s)} s` : s < 7200 ? `${Math.round(s / 60)} min` : `${Math.round(s / 3600)} h`;
+    if (s < 10) return `${s.toFixed(1)} s`;
+    if (s < 120) return `${Math.round(s)} s`;
+    return s < 7200 ? `${Math.round(s / 60)} min` : `${Math.round(s / 3600)} h`;
   },
   time: (ms) => (ms ? new Date(ms).toLocaleTimeString() : "—"),
 };
@@ -46,4 +48,9 @@ export function bar(fraction, kind = "") {
 
 export function setText(node, text) {
   if (node.textContent !== text) node.textContent = text;
+}
+
+/** "3 corrections", "1 stretch": `n` and the word, with `suffix` for more than one. */
+export function plural(n, word, suffix = "s") {
+  return `${n} ${word}${n === 1 ? "" : suffix}`;
 }

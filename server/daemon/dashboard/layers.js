@@ -168,7 +168,8 @@ export function renderLayers(v) {
       }
       if (c.marker) {
         const [x, y] = v.toScreen(c.marker[0], c.marker[1]);
-        correctionMarker(ctx, x, y, c.doc.reason === "skipped" ? COLORS.skipped : COLORS.correction, `v${c.doc.version}`);
+        const color = c.doc.reason === "skipped" ? COLORS.skipped : COLORS.correction;
+        correctionMarker(ctx, x, y, color, `v${c.doc.version}`);
         markers += 1;
       }
     }
@@ -214,7 +215,8 @@ export function drawRobots(v, ctx) {
   ctx.font = "600 11px system-ui, sans-serif";
   ctx.textBaseline = "middle";
   const many = shown.length > 12;
-  shown.sort((a, b) => (a.focus === b.focus ? a.id.localeCompare(b.id, undefined, { numeric: true }) : a.focus ? -1 : 1));
+  const byId = (a, b) => a.id.localeCompare(b.id, undefined, { numeric: true });
+  shown.sort((a, b) => (a.focus === b.focus ? byId(a, b) : a.focus ? -1 : 1));
   const boxes = [];
   for (const { id, r, x, y, focus } of shown) {
     const text = many && !focus ? id : r.label || id;
@@ -222,7 +224,8 @@ export function drawRobots(v, ctx) {
     const box = [x + 13, y - 20, x + 13 + w, y - 4];
     if (!focus && boxes.some((b) => box[0] < b[2] && b[0] < box[2] && box[1] < b[3] && b[1] < box[3])) continue;
     boxes.push(box);
-    label(ctx, x + 13, y - 12, text, r.alive ? "rgba(15, 23, 42, 0.85)" : "rgba(100, 116, 139, 0.85)", "#f8fafc", "left");
+    const bg = r.alive ? "rgba(15, 23, 42, 0.85)" : "rgba(100, 116, 139, 0.85)";
+    label(ctx, x + 13, y - 12, text, bg, "#f8fafc", "left");
   }
   v.stats.robotsDrawn = n;
 }

@@ -52,7 +52,15 @@ export class MapView {
     this.corrections = []; // CorrectionDoc
     this.missed = []; // [[x, y], ...] stretches
     this.robots = new Map(); // id -> { x, y, yaw, alive, trail: [[x,y]], label, sub, selected }
-    this.show = { path: true, others: true, regions: true, live: true, coverage: true, corrections: true, trails: true };
+    this.show = {
+      path: true,
+      others: true,
+      regions: true,
+      live: true,
+      coverage: true,
+      corrections: true,
+      trails: true,
+    };
     this.pick = null; // { radius } while choosing a start
     this.cursor = null; // world point under the pointer
     this.hoverRobot = null;
@@ -69,8 +77,14 @@ export class MapView {
   // --- data -------------------------------------------------------------------------------------------------
 
   setGrid(doc) {
-    const fresh = !this.grid || this.grid.width !== doc.width || this.grid.height !== doc.height ||
-      this.grid.origin[0] !== doc.origin[0] || this.grid.origin[1] !== doc.origin[1] || this.grid.resolution !== doc.resolution;
+    const g = this.grid;
+    const fresh =
+      !g ||
+      g.width !== doc.width ||
+      g.height !== doc.height ||
+      g.origin[0] !== doc.origin[0] ||
+      g.origin[1] !== doc.origin[1] ||
+      g.resolution !== doc.resolution;
     this.grid = doc;
     this.gridImg = gridCanvas(doc, (v) => (v === 0 ? COLORS.free : v === 100 ? COLORS.occupied : COLORS.unknown));
     if (fresh) this.fit();
@@ -164,7 +178,8 @@ export class MapView {
     const plan = this.plan;
     const f = fraction === undefined || fraction === null ? 0 : Math.min(Math.max(fraction, 0), 1);
     // Steps under 0.2 % of the path wait (the layers are repainted for it).
-    if (!plan || !plan.cum || (Math.abs(f - this.drivenFraction) < 0.002 && !(f === 1 && this.drivenFraction !== 1))) return;
+    if (!plan || !plan.cum) return;
+    if (Math.abs(f - this.drivenFraction) < 0.002 && !(f === 1 && this.drivenFraction !== 1)) return;
     this.drivenFraction = f;
     const w = plan.doc.waypoints;
     const target = f * plan.cum[w.length - 1];
@@ -318,7 +333,8 @@ export class MapView {
     let len = p;
     for (const m of [1, 2, 5, 10]) if (m * p <= target) len = m * p;
     this.scaleBar.style.width = `${Math.round(len * this.view.scale)}px`;
-    this.scaleLabel.textContent = len >= 1 ? `${+len.toFixed(0)} m` : len >= 0.01 ? `${+(len * 100).toFixed(0)} cm` : `${+(len * 1000).toFixed(0)} mm`;
+    const [n, unit] = len >= 1 ? [len, "m"] : len >= 0.01 ? [len * 100, "cm"] : [len * 1000, "mm"];
+    this.scaleLabel.textContent = `${+n.toFixed(0)} ${unit}`;
   }
 
   // --- input ------------------------------------------------------------------------------------------------
@@ -433,7 +449,9 @@ export class MapView {
   worldTransform(ctx) {
     const v = this.view;
     const k = this.dpr * v.scale;
-    ctx.setTransform(k, 0, 0, -k, this.dpr * (this.cssW / 2 - v.cx * v.scale), this.dpr * (this.cssH / 2 + v.cy * v.scale));
+    const ex = this.dpr * (this.cssW / 2 - v.cx * v.scale);
+    const ey = this.dpr * (this.cssH / 2 + v.cy * v.scale);
+    ctx.setTransform(k, 0, 0, -k, ex, ey);
   }
 
   screenTransform(ctx) {

@@ -189,7 +189,8 @@ export function finishMarker(ctx, x, y) {
   ctx.fillStyle = "#ffffff";
   ctx.fillRect(-7, -7, 14, 14);
   ctx.fillStyle = "#111827";
-  for (let i = 0; i < 2; i++) for (let j = 0; j < 2; j++) if ((i + j) % 2 === 0) ctx.fillRect(-7 + i * 7, -7 + j * 7, 7, 7);
+  ctx.fillRect(-7, -7, 7, 7);
+  ctx.fillRect(0, 0, 7, 7);
   ctx.lineWidth = 1.5;
   ctx.strokeStyle = "#111827";
   ctx.strokeRect(-7, -7, 14, 14);

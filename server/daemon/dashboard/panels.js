@@ -1,11 +1,12 @@
 // The side panel: the site's facts, the plans list, the selected plan (metrics, corrections, actions), the robots
 // table and the missions. Rendering is throttled and rows are updated in place: 30 robots at 10 Hz stay cheap.
 
-import { $, bar, chip, el, fmt, setText } from "./dom.js";
+import { $, bar, chip, el, fmt, plural, setText } from "./dom.js";
 import { paletteGradient } from "./map.js";
 import { throttle } from "./sse.js";
 import { state } from "./store.js";
-import { selectPlan, selectRobot } from "./app.js";
+import { selectPlan } from "./app.js";
+import { selectRobot } from "./robots.js";
 
 export function renderSite() {
   const s = state.summary;
@@ -48,7 +49,8 @@ export function renderPlansNow() {
   const list = $("plans-list");
   $("plans-count").textContent = state.order.length ? `${state.order.length}` : "";
   if (!state.order.length) {
-    list.replaceChildren(el("p", { class: "empty-note", text: state.site ? "No plan yet: set the robot above, press New plan, click the start on the map." : "" }));
+    const hint = "No plan yet: set the robot above, press New plan, click the start on the map.";
+    list.replaceChildren(el("p", { class: "empty-note", text: state.site ? hint : "" }));
     return;
   }
   const rows = state.order.slice(0, 200).map((id) => {
@@ -77,10 +79,19 @@ export function renderPlansNow() {
       el("span", { class: "plan-ver muted", text: p.version ? `v${p.version}` : "" }),
       bar(frac, computing ? "computing" : "driven"),
     );
-    row.title = computing ? `computing ${fmt.pct(p.progress)}` : p.driven_fraction !== undefined ? `driven ${fmt.pct(p.driven_fraction)}` : p.status;
+    row.title = computing
+      ? `computing ${fmt.pct(p.progress)}`
+      : p.driven_fraction !== undefined
+        ? `driven ${fmt.pct(p.driven_fraction)}`
+        : p.status;
     return row;
   });
   list.replaceChildren(...rows);
+}
+
+/** Dwell CV with the planned speeds / with one constant speed (lower is more even). */
+function dwell(m) {
+  return `${fmt.num(m.dwell_cv, 2)} / ${fmt.num(m.dwell_cv_const_speed, 2)}`;
 }
 
 export function renderPlan() {
@@ -112,7 +123,7 @@ export function renderPlan() {
   const corr = state.corrections.get(id) || [];
   const facts = [
     ["Robot", p.robot || "—"],
-    ["Version", `v${p.version}${p.corrections ? ` · ${p.corrections} correction${p.corrections > 1 ? "s" : ""}` : ""}`],
+    ["Version", `v${p.version}${p.corrections ? ` · ${plural(p.corrections, "correction")}` : ""}`],
     ["Watch", p.watch || "—"],
     ["Mission", p.mission || "—"],
     ["Waypoints", doc ? `${doc.waypoints.length}` : "—"],
@@ -133,7 +144,7 @@ export function renderPlan() {
       ["Coverable", m.coverable_area_m2 !== undefined ? `${fmt.num(m.coverable_area_m2, 1)} m²` : "—"],
       ["Reachable", m.reachable_area_m2 !== undefined ? `${fmt.num(m.reachable_area_m2, 1)} m²` : "—"],
       ["Free", m.free_area_m2 !== undefined ? `${fmt.num(m.free_area_m2, 1)} m²` : "—"],
-      ["Dwell CV", m.dwell_cv !== undefined ? `${fmt.num(m.dwell_cv, 2)} / ${fmt.num(m.dwell_cv_const_speed, 2)}` : "—"],
+      ["Dwell CV", m.dwell_cv !== undefined ? dwell(m) : "—"],
       ["Compute", `${fmt.num(m.compute_ms, 0)} ms`],
     ];
     // Two figures a row: the table stays short enough to keep the robots in view.
@@ -151,7 +162,7 @@ export function renderPlan() {
   }
   const warnings = [...(p.warnings || [])];
   if (p.error) warnings.unshift(`error: ${p.error}`);
-  if (p.missed && p.missed.length) warnings.push(`${p.missed.length} stretch${p.missed.length > 1 ? "es" : ""} missed (blocked)`);
+  if (p.missed && p.missed.length) warnings.push(`${plural(p.missed.length, "stretch", "es")} missed (blocked)`);
   $("pd-warnings").replaceChildren(...warnings.map((w) => el("li", { text: w })));
 
   const cl = $("pd-corrections");
@@ -208,7 +219,8 @@ export function renderRobotsNow() {
   const alive = ids.filter((id) => state.robots.get(id).view.alive).length;
   $("robots-count").textContent = ids.length ? `${alive} alive / ${ids.length}` : "";
   if (!ids.length) {
-    body.replaceChildren(el("tr", {}, el("td", { colspan: "4", class: "empty-note", text: "No robot on this site yet." })));
+    const note = el("td", { colspan: "4", class: "empty-note", text: "No robot on this site yet." });
+    body.replaceChildren(el("tr", {}, note));
     return;
   }
   // Rows are kept and updated in place (30 robots at 10 Hz must stay cheap).
@@ -236,8 +248,13 @@ export function renderRobotsNow() {
     const f = v.driven_fraction;
     tr.querySelector(".bar i").style.width = `${((f || 0) * 100).toFixed(1)}%`;
     setText(tr.querySelector(".rpct"), f !== undefined ? `${Math.round(f * 100)}%` : "");
-    const corr = v.last_correction ? ` · last correction v${v.last_correction.version} ${v.last_correction.reason}` : "";
-    tr.title = `${id}: ${v.alive ? "alive" : "lost"}${v.pose ? ` at (${v.pose.x.toFixed(2)}, ${v.pose.y.toFixed(2)})` : ""}${v.driven_m ? ` · ${v.driven_m.toFixed(1)} m driven` : ""}${corr}`;
+    const lc = v.last_correction;
+    tr.title = [
+      `${id}: ${v.alive ? "alive" : "lost"}`,
+      v.pose ? ` at (${v.pose.x.toFixed(2)}, ${v.pose.y.toFixed(2)})` : "",
+      v.driven_m ? ` · ${v.driven_m.toFixed(1)} m driven` : "",
+      lc ? ` · last correction v${lc.version} ${lc.reason}` : "",
+    ].join("");
     setText(tr.querySelector(".rseen"), fmt.age(v.last_seen_ms));
     out.push(tr);
   }
@@ -250,9 +267,13 @@ export function fillRobotChoices() {
   const seen = new Map();
   for (const r of state.allRobots) seen.set(r.robot, r);
   for (const [id, r] of state.robots) seen.set(id, r.view);
-  const list = [...seen.values()].sort((a, b) => (a.alive === b.alive ? a.robot.localeCompare(b.robot, undefined, { numeric: true }) : a.alive ? -1 : 1));
+  const byId = (a, b) => a.robot.localeCompare(b.robot, undefined, { numeric: true });
+  const list = [...seen.values()].sort((a, b) => (a.alive === b.alive ? byId(a, b) : a.alive ? -1 : 1));
   const opts = list.map((r) =>
-    el("option", { value: r.robot, text: `${r.robot}${r.alive ? "" : " (lost)"}${r.plan_id ? ` (${r.plan_id})` : ""}` }),
+    el("option", {
+      value: r.robot,
+      text: `${r.robot}${r.alive ? "" : " (lost)"}${r.plan_id ? ` (${r.plan_id})` : ""}`,
+    }),
   );
   if (!opts.length) opts.push(el("option", { value: "", text: "no robot yet" }));
   const sig = opts.map((o) => o.value + o.textContent).join("|");
@@ -271,37 +292,37 @@ export const renderMissions = throttle(() => {
     box.replaceChildren(el("p", { class: "empty-note", text: "No mission on this site." }));
     return;
   }
-  box.replaceChildren(
-    ...list.map((m) =>
-      el(
-        "div",
-        { class: "mission", dataset: { testid: "mission-row", mission: m.mission_id, status: m.status } },
-        el(
-          "div",
-          { class: "mission-head" },
-          el("span", { class: "plan-id", text: m.mission_id }),
-          chip(m.status),
-          el("span", { class: "muted", text: m.eta_s !== undefined ? `ETA ${fmt.dur(m.eta_s)}` : "" }),
-        ),
-        bar(m.progress, m.status === "planning" ? "computing" : "driven"),
-        el(
-          "div",
-          { class: "mission-cov muted" },
-          `planned ${m.coverage.planned_pct !== undefined ? fmt.num(m.coverage.planned_pct, 1) + " %" : "—"} · measured ${fmt.num(m.coverage.measured_pct, 1)} %` +
-            (m.coverage.seam_pct !== undefined ? ` · seams ${fmt.num(m.coverage.seam_pct, 1)} %` : ""),
-        ),
-        el(
-          "div",
-          { class: "mission-plans" },
-          ...m.plans.map((p) =>
-            el(
-              "button",
-              { class: "link", type: "button", onclick: () => state.plans.has(p.plan_id) && selectPlan(p.plan_id), title: `${p.plan_id}: ${p.status}, driven ${fmt.pct(p.driven_fraction)}` },
-              `${p.robot} ▸ ${p.plan_id} ${Math.round((p.driven_fraction || 0) * 100)}%`,
-            ),
-          ),
-        ),
-      ),
-    ),
-  );
+  box.replaceChildren(...list.map(missionRow));
 }, 300);
+
+function missionRow(m) {
+  const c = m.coverage;
+  const pct = (v) => (v === undefined || v === null ? "—" : `${fmt.num(v, 1)} %`);
+  const figures = `planned ${pct(c.planned_pct)} · measured ${pct(c.measured_pct)}`;
+  const seams = c.seam_pct !== undefined ? ` · seams ${pct(c.seam_pct)}` : "";
+  const planButton = (p) =>
+    el(
+      "button",
+      {
+        class: "link",
+        type: "button",
+        title: `${p.plan_id}: ${p.status}, driven ${fmt.pct(p.driven_fraction)}`,
+        onclick: () => state.plans.has(p.plan_id) && selectPlan(p.plan_id),
+      },
+      `${p.robot} ▸ ${p.plan_id} ${Math.round((p.driven_fraction || 0) * 100)}%`,
+    );
+  return el(
+    "div",
+    { class: "mission", dataset: { testid: "mission-row", mission: m.mission_id, status: m.status } },
+    el(
+      "div",
+      { class: "mission-head" },
+      el("span", { class: "plan-id", text: m.mission_id }),
+      chip(m.status),
+      el("span", { class: "muted", text: m.eta_s !== undefined ? `ETA ${fmt.dur(m.eta_s)}` : "" }),
+    ),
+    bar(m.progress, m.status === "planning" ? "computing" : "driven"),
+    el("div", { class: "mission-cov muted" }, figures + seams),
+    el("div", { class: "mission-plans" }, ...m.plans.map(planButton)),
+  );
+}

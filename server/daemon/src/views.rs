@@ -6,7 +6,9 @@ use std::sync::{Arc, RwLock};
 
 use shift_engine::{CoverageKey, CoverageRecord, PlanRecord};
 use shift_planner::map::OccupancyGrid;
-use shift_proto::{CorrectionDoc, MissionView, PlanDocument, PlanStatus, PlanStatusResponse, RegionReady, RobotView, SiteSummary};
+use shift_proto::{
+    CorrectionDoc, MissionView, PlanDocument, PlanStatus, PlanStatusResponse, RegionReady, RobotView, SiteSummary,
+};
 
 /// One plan as the API shows it.
 #[derive(Debug, Clone)]

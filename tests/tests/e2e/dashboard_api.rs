@@ -55,7 +55,11 @@ async fn wait_for(
 fn robots_named(v: &Value) -> Vec<String> {
     v["robots"]
         .as_array()
-        .map(|a| a.iter().filter_map(|r| r["robot"].as_str().map(str::to_owned)).collect())
+        .map(|a| {
+            a.iter()
+                .filter_map(|r| r["robot"].as_str().map(str::to_owned))
+                .collect()
+        })
         .unwrap_or_default()
 }
 
@@ -73,7 +77,11 @@ async fn a_site_stream_shows_its_robots_plans_corrections_and_live_points_only()
     // The page and its modules are served from the binary.
     let page = server.http.get(server.url("/")).send().await?;
     ensure!(page.status() == 200);
-    let kind = page.headers().get("content-type").and_then(|v| v.to_str().ok()).map(str::to_owned);
+    let kind = page
+        .headers()
+        .get("content-type")
+        .and_then(|v| v.to_str().ok())
+        .map(str::to_owned);
     ensure!(kind.as_deref().is_some_and(|k| k.starts_with("text/html")), "{kind:?}");
     let html = page.text().await?;
     let script = html
@@ -82,7 +90,11 @@ async fn a_site_stream_shows_its_robots_plans_corrections_and_live_points_only()
         .and_then(|s| s.split('"').next())
         .context("the page loads a script from /dashboard/")?
         .to_owned();
-    let js = server.http.get(server.url(&format!("/dashboard/{script}"))).send().await?;
+    let js = server
+        .http
+        .get(server.url(&format!("/dashboard/{script}")))
+        .send()
+        .await?;
     ensure!(js.status() == 200, "{script}: {}", js.status());
     let (code, _) = server.get("/dashboard/..%2FCargo.toml").await?;
     ensure!(code == 404, "only the page's own files are served: {code}");
@@ -123,7 +135,10 @@ async fn a_site_stream_shows_its_robots_plans_corrections_and_live_points_only()
     .await?;
     for (name, v) in &seen {
         if name == "robots" {
-            ensure!(!robots_named(v).contains(&"r2".to_owned()), "the yard's robot on the hall's stream: {v}");
+            ensure!(
+                !robots_named(v).contains(&"r2".to_owned()),
+                "the yard's robot on the hall's stream: {v}"
+            );
             ensure!(v["robots"][0]["plan_id"] == hall_plan.as_str(), "{v}");
         }
     }
@@ -131,10 +146,19 @@ async fn a_site_stream_shows_its_robots_plans_corrections_and_live_points_only()
     // A post on the lane 2 m ahead: the hall's stream carries the correction and a live map change.
     let (ox, oy, _) = along(w, seg, 0.8 + 2.0);
     hall_robot.cloud("r1", &post(ox, oy)).await?;
-    let seen = wait_for(&mut hall, LONG, |name, v| name == "correction" && v["plan_id"] == hall_plan.as_str()).await?;
+    let seen = wait_for(&mut hall, LONG, |name, v| {
+        name == "correction" && v["plan_id"] == hall_plan.as_str()
+    })
+    .await?;
     let (_, correction) = seen.last().context("a correction")?;
-    ensure!(correction["type"] == "correction" && correction["version"] == 2, "{correction}");
-    wait_for(&mut hall, SHORT, |name, v| name == "live" && v["count"].as_u64().unwrap_or(0) > 0).await?;
+    ensure!(
+        correction["type"] == "correction" && correction["version"] == 2,
+        "{correction}"
+    );
+    wait_for(&mut hall, SHORT, |name, v| {
+        name == "live" && v["count"].as_u64().unwrap_or(0) > 0
+    })
+    .await?;
 
     // The live points are there, near the post; the corrections are kept for a page that opens later.
     let (code, live) = server.get("/v1/sites/hall/live?max_points=10").await?;
@@ -145,13 +169,22 @@ async fn a_site_stream_shows_its_robots_plans_corrections_and_live_points_only()
     ensure!(live["truncated"] == (count > 10), "{live}");
     for p in pts {
         let (x, y) = (p[0].as_f64().unwrap_or(f64::NAN), p[1].as_f64().unwrap_or(f64::NAN));
-        ensure!((x - ox).hypot(y - oy) < 0.5, "live point ({x}, {y}) far from the post at ({ox}, {oy})");
+        ensure!(
+            (x - ox).hypot(y - oy) < 0.5,
+            "live point ({x}, {y}) far from the post at ({ox}, {oy})"
+        );
     }
     let (code, kept) = server.get(&format!("/v1/plans/{hall_plan}/corrections")).await?;
     ensure!(code == 200, "{code} {kept}");
-    ensure!(kept[0]["version"] == 2 && kept[0]["plan_id"] == hall_plan.as_str(), "{kept}");
+    ensure!(
+        kept[0]["version"] == 2 && kept[0]["plan_id"] == hall_plan.as_str(),
+        "{kept}"
+    );
     let (code, none) = server.get(&format!("/v1/plans/{yard_plan}/corrections")).await?;
-    ensure!(code == 200 && none.as_array().is_some_and(Vec::is_empty), "{code} {none}");
+    ensure!(
+        code == 200 && none.as_array().is_some_and(Vec::is_empty),
+        "{code} {none}"
+    );
     let (code, yard_live) = server.get("/v1/sites/yard/live").await?;
     ensure!(code == 200 && yard_live["count"] == 0, "{yard_live}");
     for (path, want) in [
@@ -170,7 +203,12 @@ async fn a_site_stream_shows_its_robots_plans_corrections_and_live_points_only()
     while let Ok(Some(e)) = yard.next(Duration::from_millis(1500)).await {
         yard_events.push(e);
     }
-    ensure!(yard_events.first().is_some_and(|(n, v)| n == "site" && v["site"] == "yard"), "{yard_events:?}");
+    ensure!(
+        yard_events
+            .first()
+            .is_some_and(|(n, v)| n == "site" && v["site"] == "yard"),
+        "{yard_events:?}"
+    );
     ensure!(
         yard_events
             .iter()
@@ -179,12 +217,19 @@ async fn a_site_stream_shows_its_robots_plans_corrections_and_live_points_only()
     );
     for (name, v) in &yard_events {
         let text = v.to_string();
-        ensure!(!text.contains(&hall_plan) && !text.contains("\"r1\""), "hall's {name} on the yard's stream: {v}");
+        ensure!(
+            !text.contains(&hall_plan) && !text.contains("\"r1\""),
+            "hall's {name} on the yard's stream: {v}"
+        );
     }
 
     // The new routes are in the API description.
     let (_, doc) = server.get("/openapi.json").await?;
-    for path in ["/v1/sites/{site}/live", "/v1/sites/{site}/events", "/v1/plans/{id}/corrections"] {
+    for path in [
+        "/v1/sites/{site}/live",
+        "/v1/sites/{site}/events",
+        "/v1/plans/{id}/corrections",
+    ] {
         ensure!(doc["paths"][path].is_object(), "{path} missing from openapi.json");
     }
     drop((hall_robot, yard_robot));

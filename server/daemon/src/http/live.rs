@@ -23,7 +23,11 @@ fn parse_query(raw: &str) -> Result<LivePointsQuery, ApiError> {
                 }
                 q.max_points = Some(n);
             }
-            other => return Err(ApiError::bad_request(format!("{other}: unknown parameter (max_points)"))),
+            other => {
+                return Err(ApiError::bad_request(format!(
+                    "{other}: unknown parameter (max_points)"
+                )));
+            }
         }
     }
     Ok(q)

@@ -170,7 +170,12 @@ mod tests {
             robot: id.into(),
             alive: true,
             last_seen_ms: 1,
-            pose: Some(PoseView { x, y: 0.0, yaw: 0.0, stamp_ns: 0 }),
+            pose: Some(PoseView {
+                x,
+                y: 0.0,
+                yaw: 0.0,
+                stamp_ns: 0,
+            }),
             plan_id: None,
             driven_fraction: None,
             driven_m: None,
@@ -183,7 +188,11 @@ mod tests {
     #[test]
     fn only_the_sites_robots_that_moved_are_sent_again() {
         let mut sent = HashMap::new();
-        let first = changed_robots("a", vec![robot("r1", "a", 0.0), robot("r2", "a", 0.0), robot("r3", "b", 0.0)], &mut sent);
+        let first = changed_robots(
+            "a",
+            vec![robot("r1", "a", 0.0), robot("r2", "a", 0.0), robot("r3", "b", 0.0)],
+            &mut sent,
+        );
         assert_eq!(first.iter().map(|r| r.robot.as_str()).collect::<Vec<_>>(), ["r1", "r2"]);
         let again = changed_robots("a", vec![robot("r1", "a", 0.0), robot("r2", "a", 1.0)], &mut sent);
         assert_eq!(again.iter().map(|r| r.robot.as_str()).collect::<Vec<_>>(), ["r2"]);
