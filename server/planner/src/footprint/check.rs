@@ -105,9 +105,10 @@ impl<'a> FootprintCheck<'a> {
         })
     }
 
-    /// Distance from a pose's centre beyond which no blocked square (grown by the margin) can touch the
-    /// footprint at any heading, metres.
-    fn free_beyond_m(&self) -> f64 {
+    /// Clearance (from a pose's centre to the nearest blocked cell centre) beyond which no blocked square,
+    /// grown by the margin, can touch the footprint at any heading: the circumscribed radius plus half the
+    /// grown square's diagonal, metres.
+    pub fn turning_clearance_m(&self) -> f64 {
         self.footprint.circumscribed_radius_m()
             + (self.grid.geometry.resolution / 2.0 + self.margin_m) * std::f64::consts::SQRT_2
     }
@@ -116,7 +117,14 @@ impl<'a> FootprintCheck<'a> {
     /// clear of every blocked square).
     #[inline]
     pub fn turns_freely(&self, p: Point2) -> bool {
-        self.clearance_lower_bound(p) >= self.free_beyond_m()
+        self.spare_m(p) >= 0.0
+    }
+
+    /// How far the robot may move from `p` and still turn freely there, metres (negative where it cannot
+    /// turn freely at `p`): clearance changes by at most the distance moved.
+    #[inline]
+    pub fn spare_m(&self, p: Point2) -> f64 {
+        self.clearance_lower_bound(p) - self.turning_clearance_m()
     }
 
     /// True when the footprint at pose (`x`, `y`, `yaw_rad`) (map frame) overlaps no blocked cell.
@@ -237,7 +245,7 @@ impl<'a> FootprintCheck<'a> {
         let len = (b - a).norm();
         let m = (len / self.sample_spacing_m()).ceil().max(1.0) as usize;
         let spacing = len / m as f64;
-        let needed = self.free_beyond_m();
+        let needed = self.turning_clearance_m();
         let mut j = 1;
         while j <= m {
             let p = a + (b - a) * (j as f64 / m as f64);
