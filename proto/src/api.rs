@@ -27,13 +27,20 @@ pub struct ErrorDetail {
     pub message: String,
 }
 
-/// The robot a plan is for.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+/// The robot a plan is for: a disc of `radius`, or a `footprint` polygon (exactly one of the two).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 #[serde(deny_unknown_fields)]
 pub struct RobotSpec {
-    /// Footprint radius, metres.
+    /// Footprint radius, metres (a disc robot). 0 or absent when `footprint` is given.
+    #[serde(default)]
     pub radius: f64,
+    /// Footprint polygon, Nav2's `footprint` convention: `[[x, y], …]` in the robot frame (x forward, y to
+    /// the left, metres, origin at the centre the robot turns about), convex, either winding, implicitly
+    /// closed, the origin inside. Instead of `radius`, for robots that are not discs (sweepers and floor
+    /// scrubbers are rectangles): plans then keep the polygon, at the path's heading, off every occupied cell.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub footprint: Option<Vec<[f64; 2]>>,
     /// Width of the cleaning / spraying tool, metres.
     pub tool_width: f64,
     /// Slowest cover speed, m/s.
@@ -62,6 +69,7 @@ impl RobotSpec {
     pub fn new(radius: f64, tool_width: f64) -> Self {
         Self {
             radius,
+            footprint: None,
             tool_width,
             v_min: default_v_min(),
             v_max: default_v_max(),
@@ -537,6 +545,20 @@ mod tests {
         let r: PlanRequest = serde_json::from_str(full).expect("parses");
         assert_eq!(r.options.as_ref().and_then(|o| o.seed), Some(7));
         assert_eq!(r.attribute.as_ref().map(|a| a.blobs.len()), Some(1));
+    }
+
+    #[test]
+    fn a_footprint_alone_describes_the_robot() {
+        let text = r#"{"site": "s", "start": [1, 1], "robot": {"tool_width": 0.8,
+            "footprint": [[0.6, 0.4], [-0.6, 0.4], [-0.6, -0.4], [0.6, -0.4]]}}"#;
+        let r: PlanRequest = serde_json::from_str(text).expect("parses");
+        assert_eq!(r.robot.radius, 0.0);
+        assert_eq!(r.robot.footprint.as_ref().map(Vec::len), Some(4));
+        let back: PlanRequest = serde_json::from_value(serde_json::to_value(&r).expect("ser")).expect("de");
+        assert_eq!(back, r);
+        // A disc robot's request does not name a footprint on the wire.
+        let disc = serde_json::to_value(RobotSpec::new(0.15, 0.3)).expect("ser");
+        assert!(disc.get("footprint").is_none() && disc["radius"] == 0.15);
     }
 
     #[test]

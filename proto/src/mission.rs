@@ -49,6 +49,7 @@ impl MissionRobot {
     pub fn spec(&self) -> RobotSpec {
         RobotSpec {
             radius: self.radius,
+            footprint: None,
             tool_width: self.tool_width,
             v_min: self.v_min,
             v_max: self.v_max,

@@ -21,7 +21,7 @@ impl Client {
     /// let request = PlanRequest {
     ///     site: "demo".into(),
     ///     start: [0.5, 0.5],
-    ///     robot: RobotSpec { radius: 0.15, tool_width: 0.3, v_min: 0.1, v_max: 1.0, a_max: 0.5 },
+    ///     robot: RobotSpec::new(0.15, 0.3),
     ///     attribute: None,
     ///     region: None,
     ///     options: None,

@@ -85,6 +85,7 @@ async fn a_robot_follows_its_plan_and_a_correction_and_tail_prints_it() -> Resul
             start: [0.5, 0.5],
             robot: RobotSpec {
                 radius: 0.15,
+                footprint: None,
                 tool_width: 0.3,
                 v_min: 0.1,
                 v_max: 1.0,

@@ -3,9 +3,11 @@
 
 use std::sync::Arc;
 
+use shift_planner::PlannerError;
+use shift_planner::footprint::{FOOTPRINT_FIELD, Footprint};
 use shift_planner::geom::Point2;
 use shift_planner::map::grid::{CellState, GridGeometry, OccupancyGrid};
-use shift_planner::pipeline::{Objective, PlanMonitor, PlanOutput, PlanParams, plan_shaped};
+use shift_planner::pipeline::{Objective, PlanMonitor, PlanOutput, PlanParams, plan_footprinted, plan_shaped};
 use shift_planner::space::{CoverageSpace, RobotShape};
 use shift_planner::speed::attribute::{AttributeBlob, AttributeMap};
 use shift_planner::speed::{SpeedLimits, SpeedParams, SpeedProfile};
@@ -85,7 +87,9 @@ pub struct JobResult {
     pub with_attribute: bool,
 }
 
-/// Computes the plan and its speed profile (RFICP with the request's attribute blobs; uniform without).
+/// Computes the plan and its speed profile (RFICP with the request's attribute blobs; uniform without). A
+/// robot given by a footprint polygon is planned with [`plan_footprinted`] (its metrics count footprint
+/// collisions).
 /// With a region polygon, cells whose centre lies outside it are treated as unknown (neither covered nor
 /// driven through), so the whole plan stays inside the polygon. The job's live overlay marks free cells
 /// occupied ([`apply_overlay`]; points within two robot radii plus a cell of the start are left out, so a
@@ -104,16 +108,36 @@ pub fn run_job(job: &PlanJob, monitor: &mut dyn PlanMonitor) -> shift_planner::R
         }
     };
     let r = &job.request.robot;
+    // A footprint polygon plans in the space of its inscribed planning radius (planner::pipeline::footprinted);
+    // the robot is never wider than its circumscribed disc.
+    let footprint = r.footprint.as_deref().map(Footprint::new).transpose()?;
+    let res = grid.geometry.resolution;
+    let (radius_m, outer_m) = match &footprint {
+        Some(f) => (f.planning_radius_m(res), f.circumscribed_radius_m()),
+        None => (r.radius, r.radius),
+    };
     let robot = RobotShape {
-        radius_m: r.radius,
+        radius_m,
         tool_width_m: r.tool_width,
     };
     let start = Point2::new(job.request.start[0], job.request.start[1]);
     if !job.overlay.is_empty() {
-        let keep_clear_m = 2.0 * r.radius + grid.geometry.resolution;
+        let keep_clear_m = 2.0 * outer_m + res;
         apply_overlay(&mut grid, &job.overlay, start, keep_clear_m);
     }
-    let space = CoverageSpace::with_start_snap(grid, robot, start, job.request.snap_start_m)?;
+    let space = match CoverageSpace::with_start_snap(grid, robot, start, job.request.snap_start_m) {
+        Err(PlannerError::NoTraversableSpace { .. }) if footprint.is_some() => {
+            return Err(PlannerError::InvalidParam {
+                name: FOOTPRINT_FIELD,
+                reason: format!(
+                    "the robot fits nowhere on this map: not even its inscribed disc (radius {:.3} m, plus half a \
+                     cell) clears the walls",
+                    footprint.as_ref().map_or(0.0, Footprint::inscribed_radius_m)
+                ),
+            });
+        }
+        other => other?,
+    };
     let limits = SpeedLimits::new(r.v_min, r.v_max, r.a_max);
     let params = PlanParams {
         decomposition: job.options.decomposition,
@@ -129,7 +153,10 @@ pub fn run_job(job: &PlanJob, monitor: &mut dyn PlanMonitor) -> shift_planner::R
         None => None,
     };
     let speed = SpeedParams::new(limits, r.tool_width);
-    let (output, profile) = plan_shaped(&space, &params, attribute.as_ref(), &speed, monitor)?;
+    let (output, profile) = match &footprint {
+        Some(f) => plan_footprinted(&space, f, &params, attribute.as_ref(), &speed, monitor)?,
+        None => plan_shaped(&space, &params, attribute.as_ref(), &speed, monitor)?,
+    };
     if monitor.cancelled() {
         return Err(shift_planner::PlannerError::Cancelled);
     }
@@ -160,6 +187,7 @@ mod tests {
             start: [1.0, 1.0],
             robot: RobotSpec {
                 radius: 0.1,
+                footprint: None,
                 tool_width: 0.2,
                 v_min: 0.1,
                 v_max: 1.0,
@@ -200,6 +228,7 @@ mod tests {
             start,
             robot: RobotSpec {
                 radius: 0.1,
+                footprint: None,
                 tool_width: 0.2,
                 v_min: 0.1,
                 v_max: 1.0,
@@ -262,5 +291,44 @@ mod tests {
             let d = dx.max(0.0).hypot(dy.max(0.0));
             assert!(d >= 0.1 - 1e-6, "{p:?} is {d} m from the obstacle");
         }
+    }
+
+    /// A rectangular robot (a footprint, no radius) plans through a doorway only it passes lengthwise; the
+    /// document it becomes has no footprint collision, counted again here.
+    #[test]
+    fn a_footprint_request_plans_through_the_job() {
+        let rooms = shift_planner::testing::two_rooms((4.0, 4.0), 0.2, 1.0, 0.0, 0.05).expect("scene");
+        let grid = Arc::new(rooms.grid.clone());
+        let rect = vec![[0.6, 0.4], [-0.6, 0.4], [-0.6, -0.4], [0.6, -0.4]];
+        let request = PlanRequest {
+            robot: RobotSpec {
+                radius: 0.0,
+                footprint: Some(rect.clone()),
+                tool_width: 0.8,
+                ..RobotSpec::new(0.0, 0.8)
+            },
+            ..open_request([rooms.start.x, rooms.start.y])
+        };
+        let options = validate(&request, &grid).expect("valid");
+        let job = PlanJob {
+            plan_id: "p-1".into(),
+            grid,
+            request,
+            options,
+            overlay: Vec::new(),
+        };
+        let res = run_job(&job, &mut NoMonitor).expect("plans");
+        let doc = crate::plan_doc::to_document("p-1", (&res.space, &res.output), &res.profile, false, 1.0);
+        assert_eq!(doc.metrics.collisions, 0, "{:?}", doc.metrics);
+        let fp = Footprint::new(&rect).expect("valid");
+        let check =
+            shift_planner::footprint::FootprintCheck::new(&res.space.grid, &res.space.clearance, &fp).expect("check");
+        let path: Vec<Point2> = doc.waypoints.iter().map(|w| Point2::new(w.x, w.y)).collect();
+        assert_eq!(check.count_collisions(&path), 0);
+        assert!(
+            path.iter().any(|&p| rooms.in_far_room(p)),
+            "the plan reaches the far room"
+        );
+        assert!(doc.metrics.coverage_pct > 60.0, "{:?}", doc.metrics);
     }
 }

@@ -447,6 +447,7 @@ mod tests {
             start: [0.25, 0.25],
             robot: RobotSpec {
                 radius: 0.1,
+                footprint: None,
                 tool_width: 0.2,
                 v_min: 0.1,
                 v_max: 1.0,

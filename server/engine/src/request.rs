@@ -3,6 +3,7 @@
 //! (an unreachable start, say), but never for a reason a client could have been told at once.
 
 use shift_planner::decompose::DecompositionMethod;
+use shift_planner::footprint::Footprint;
 use shift_planner::geom::Point2;
 pub use shift_planner::geom::point_in_polygon;
 use shift_planner::map::grid::OccupancyGrid;
@@ -76,7 +77,21 @@ pub fn parse_options(req: &PlanRequest) -> Result<ParsedOptions> {
 pub fn validate(req: &PlanRequest, grid: &OccupancyGrid) -> Result<ParsedOptions> {
     crate::site::validate_name("site", &req.site)?;
     let r = &req.robot;
-    positive("robot.radius", r.radius)?;
+    // A disc (`radius`) or a polygon (`footprint`), exactly one; the polygon is validated by the planner.
+    match &r.footprint {
+        None => {
+            positive("robot.radius", r.radius)?;
+        }
+        Some(_) if r.radius != 0.0 => {
+            return Err(invalid(format!(
+                "robot.radius ({}) and robot.footprint are alternatives: give one of them",
+                r.radius
+            )));
+        }
+        Some(vertices) => {
+            Footprint::new(vertices).map_err(|e| invalid(e.to_string()))?;
+        }
+    }
     positive("robot.tool_width", r.tool_width)?;
     // Lanes are a tool width apart: a tool much narrower than a cell asks for more lanes than the map has
     // cells across (a 1e-9 m tool on a 10 m room is 10^10 lanes).
@@ -177,6 +192,7 @@ mod tests {
             start: [1.0, 1.0],
             robot: RobotSpec {
                 radius: 0.15,
+                footprint: None,
                 tool_width: 0.3,
                 v_min: 0.1,
                 v_max: 1.0,
@@ -251,6 +267,34 @@ mod tests {
             r.snap_start_m = Some(d);
             let e = validate(&r, &g).expect_err("bad snap");
             assert!(e.to_string().contains("snap_start_m"), "{e}");
+        }
+    }
+
+    #[test]
+    fn a_robot_is_a_radius_or_a_footprint() {
+        let g = grid();
+        let rect = vec![[0.3, 0.2], [-0.3, 0.2], [-0.3, -0.2], [0.3, -0.2]];
+        let mut r = request();
+        r.robot.radius = 0.0;
+        r.robot.footprint = Some(rect.clone());
+        validate(&r, &g).expect("a footprint alone");
+        r.robot.radius = 0.15;
+        let e = validate(&r, &g).expect_err("both");
+        assert!(e.to_string().contains("robot.radius"), "{e}");
+        let mut r = request();
+        r.robot.radius = 0.0;
+        let e = validate(&r, &g).expect_err("neither");
+        assert!(e.to_string().contains("robot.radius"), "{e}");
+        for bad in [
+            vec![[0.3, 0.2], [-0.3, 0.2]],
+            vec![[1.0, 1.0], [2.0, 1.0], [2.0, 2.0]],
+            vec![[0.3, 0.2], [-0.3, 0.2], [f64::NAN, -0.2]],
+        ] {
+            let mut r = request();
+            r.robot.radius = 0.0;
+            r.robot.footprint = Some(bad);
+            let e = validate(&r, &g).expect_err("a bad polygon");
+            assert!(e.to_string().contains("robot.footprint"), "{e}");
         }
     }
 

@@ -10,10 +10,11 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 use shift_planner::correct::{self, CorrectParams, RepairKind, TimedWaypoint, World};
+use shift_planner::footprint::Footprint;
 use shift_planner::geom::Point2;
 use shift_planner::map::ikd_tree::IkdTree;
 use shift_planner::speed::SpeedLimits;
-use shift_proto::{CorrectionReason, PlanDocument, WaypointDoc};
+use shift_proto::{CorrectionReason, PlanDocument, RobotSpec, WaypointDoc};
 
 use crate::robots::Pose2;
 use crate::site::SiteMap;
@@ -53,6 +54,18 @@ impl Default for WatchParams {
             end_hold_s: 10.0,
         }
     }
+}
+
+/// The radius the watch keeps clear for a plan's robot, metres: its `radius`, or for a footprint polygon its
+/// circumscribed radius — conservative: the judgment and the repair know discs only, and the disc holding
+/// the polygon is clear wherever the polygon is, at any heading (a robot that passes a doorway only
+/// lengthwise may see a correction there that a heading-aware check would not ask for).
+pub fn clearance_radius_m(robot: &RobotSpec) -> f64 {
+    robot
+        .footprint
+        .as_deref()
+        .and_then(|v| Footprint::new(v).ok())
+        .map_or(robot.radius, |f| f.circumscribed_radius_m())
 }
 
 impl WatchParams {
@@ -229,6 +242,18 @@ mod tests {
 
     use super::*;
     use crate::site::MapSource;
+
+    #[test]
+    fn a_footprint_is_watched_with_its_circumscribed_radius() {
+        let disc = RobotSpec::new(0.15, 0.3);
+        assert_eq!(clearance_radius_m(&disc), 0.15);
+        let rect = RobotSpec {
+            radius: 0.0,
+            footprint: Some(vec![[0.6, 0.4], [-0.6, 0.4], [-0.6, -0.4], [0.6, -0.4]]),
+            ..disc
+        };
+        assert!((clearance_radius_m(&rect) - 0.6f64.hypot(0.4)).abs() < 1e-12);
+    }
 
     /// An open 8 m × 4 m room at 0.05 m with a wall ring.
     fn room() -> SiteMap {

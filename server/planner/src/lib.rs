@@ -16,6 +16,7 @@ pub mod correct;
 pub mod decompose;
 pub mod divide;
 pub mod error;
+pub mod footprint;
 pub mod geom;
 pub mod link;
 pub mod map;

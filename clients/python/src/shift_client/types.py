@@ -256,22 +256,30 @@ class VersionGap(CorrectionError):
 
 @dataclass(frozen=True)
 class RobotSpec:
-    """The robot a plan is for: footprint radius and tool width (m), speed limits (m/s), acceleration (m/s²)."""
+    """The robot a plan is for: footprint radius and tool width (m), speed limits (m/s), acceleration (m/s²).
+
+    A robot that is not a disc gives ``footprint`` instead of ``radius`` (``radius=0``): a convex polygon
+    ``[(x, y), ...]`` in the robot frame (Nav2's convention: x forward, metres, the origin inside).
+    """
 
     radius: float
     tool_width: float
     v_min: float = 0.1
     v_max: float = 1.0
     a_max: float = 0.5
+    footprint: Optional[Sequence[Tuple[float, float]]] = None
 
     def to_json(self) -> Dict[str, Any]:
-        return {
+        out: Dict[str, Any] = {
             "radius": self.radius,
             "tool_width": self.tool_width,
             "v_min": self.v_min,
             "v_max": self.v_max,
             "a_max": self.a_max,
         }
+        if self.footprint is not None:
+            out["footprint"] = [[float(x), float(y)] for x, y in self.footprint]
+        return out
 
 
 @dataclass(frozen=True)

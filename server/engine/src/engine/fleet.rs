@@ -267,7 +267,7 @@ impl Engine {
         let Some(site) = self.sites.get(&rec.request.site) else {
             return;
         };
-        let spec = rec.request.robot;
+        let spec = &rec.request.robot;
         r.watch.in_flight = true;
         r.watch.pending = false;
         r.watch.last_check_ms = now_ms;
@@ -279,7 +279,7 @@ impl Engine {
             ahead_from: a.index,
             pose,
             map: site.map.clone(),
-            params: self.config.watch.correct_params(spec.radius),
+            params: self.config.watch.correct_params(crate::watch::clearance_radius_m(spec)),
             limits: PatchLimits {
                 v_min_mps: spec.v_min,
                 v_max_mps: spec.v_max,

@@ -27,6 +27,7 @@ pub(super) fn request(site: &str) -> PlanRequest {
         start: [0.5, 0.5],
         robot: RobotSpec {
             radius: 0.1,
+            footprint: None,
             tool_width: 0.2,
             v_min: 0.1,
             v_max: 1.0,

@@ -5,7 +5,8 @@
 //! - overlap_pct = (length × tool_width − covered area) / covered area × 100;
 //! - turns = heading changes of 30° or more between consecutive segments;
 //! - collisions = path points (every segment sampled each quarter cell) closer than robot_radius to a non-free
-//!   cell centre.
+//!   cell centre; with a footprint polygon, poses whose polygon overlaps a non-free cell
+//!   (`crate::footprint::FootprintCheck::count_collisions`, which `pipeline::plan_footprinted` puts here).
 
 pub mod coverage;
 pub mod dwell;
@@ -30,7 +31,8 @@ pub struct PlanMetrics {
     pub length_m: f64,
     /// Heading changes of 30° or more.
     pub turns: usize,
-    /// Sampled path points closer than the robot radius to a non-free cell.
+    /// Sampled path points closer than the robot radius to a non-free cell (with a footprint polygon: sampled
+    /// poses whose polygon overlaps a non-free cell).
     pub collisions: usize,
     /// Coverable cells.
     pub coverable_cells: usize,

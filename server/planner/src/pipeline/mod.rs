@@ -3,6 +3,8 @@
 
 mod assemble;
 pub mod fleet;
+pub mod footprinted;
+pub use footprinted::{LaneSpace, plan_footprinted, plan_footprinted_with};
 pub mod objective;
 pub use objective::Objective;
 mod portfolio;

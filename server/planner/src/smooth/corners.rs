@@ -43,6 +43,17 @@ struct Corner {
 
 /// Rounds the corners of `path` on `space` (see the module docs). Consecutive duplicate points are dropped.
 pub fn round_corners(space: &CoverageSpace, path: &[Waypoint], params: &SmoothParams) -> SmoothedPath {
+    round_corners_where(space, path, params, &|_| true)
+}
+
+/// [`round_corners`], keeping a curve only where `also` accepts its samples too (a robot footprint's check,
+/// say: the disc's clearance is all the space knows).
+pub fn round_corners_where(
+    space: &CoverageSpace,
+    path: &[Waypoint],
+    params: &SmoothParams,
+    also: &dyn Fn(&[Point2]) -> bool,
+) -> SmoothedPath {
     let pts = distinct(path);
     let n = pts.len();
     let (corners, mut sharp) = find_corners(&pts, params);
@@ -81,7 +92,7 @@ pub fn round_corners(space: &CoverageSpace, path: &[Waypoint], params: &SmoothPa
         let p = pts[c.at].position;
         let (a, b) = (p - c.u_in * c.leg, p + c.u_out * c.leg);
         let curve = fillet(p, c, params.samples_per_rad);
-        let clear = curve.0.windows(2).all(|w| space.segment_ok(w[0], w[1]));
+        let clear = curve.0.windows(2).all(|w| space.segment_ok(w[0], w[1])) && also(&curve.0);
         if !clear {
             curves.push(None);
             sharp[c.at] = true;

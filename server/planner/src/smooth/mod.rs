@@ -5,7 +5,7 @@ pub mod bspline;
 pub mod corners;
 
 pub use bspline::BSpline;
-pub use corners::{SmoothedPath, round_corners};
+pub use corners::{SmoothedPath, round_corners, round_corners_where};
 
 /// Smoothing knobs.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -28,7 +28,7 @@ use crate::geom::Point2;
 use crate::metrics::dwell::{DwellMetrics, evaluate_dwell};
 use crate::metrics::{PlanMetrics, evaluate};
 use crate::pipeline::Waypoint;
-use crate::smooth::{SmoothParams, SmoothedPath, round_corners};
+use crate::smooth::{SmoothParams, SmoothedPath, round_corners_where};
 use crate::space::CoverageSpace;
 
 /// Knobs of [`profile_path`].
@@ -116,6 +116,18 @@ pub fn profile_path(
     attribute: Option<&AttributeMap>,
     params: &SpeedParams,
 ) -> Result<SpeedProfile> {
+    profile_path_where(space, path, attribute, params, &|_| true)
+}
+
+/// [`profile_path`], rounding a corner only where `corner_ok` accepts the curve's samples too (map frame,
+/// metres; see [`crate::smooth::round_corners_where`]).
+pub fn profile_path_where(
+    space: &CoverageSpace,
+    path: &[Waypoint],
+    attribute: Option<&AttributeMap>,
+    params: &SpeedParams,
+    corner_ok: &dyn Fn(&[Point2]) -> bool,
+) -> Result<SpeedProfile> {
     let limits = params.limits;
     limits.validate()?;
     let g = *space.geometry();
@@ -160,7 +172,7 @@ pub fn profile_path(
     };
     let (smoothed, metrics, reverted) = match &params.smooth {
         Some(sp) => {
-            let s = round_corners(space, path, sp);
+            let s = round_corners_where(space, path, sp, corner_ok);
             let pts: Vec<Point2> = s.waypoints.iter().map(|w| w.position).collect();
             let m = evaluate(space, &pts);
             if m.collisions > before.collisions || m.covered_coverable_cells < before.covered_coverable_cells {

@@ -119,6 +119,7 @@ fn request(args: &PlanArgs) -> anyhow::Result<PlanRequest> {
         start,
         robot: RobotSpec {
             radius: args.robot_radius,
+            footprint: None,
             tool_width: args.tool_width,
             v_min: args.v_min,
             v_max: args.v_max,
