@@ -114,7 +114,7 @@ async fn follow(
                 None
             }
             got = plans.recv() => match got {
-                Ok(e) => on_site(&state, &site, &e.plan_id().to_owned()).then(|| event(e.name(), &e)),
+                Ok(e) => on_site(&state, &site, e.plan_id()).then(|| event(e.name(), &e)),
                 Err(broadcast::error::RecvError::Lagged(_)) => None,
                 Err(broadcast::error::RecvError::Closed) => return,
             },
