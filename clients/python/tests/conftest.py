@@ -17,12 +17,27 @@ import socket
 import subprocess
 import time
 from pathlib import Path
-from typing import Iterator, Optional
+from typing import Callable, Iterator, Optional, TypeVar
 
 import httpx
 import pytest
 
 REPO_ROOT = Path(__file__).resolve().parents[3]
+
+
+T = TypeVar("T")
+
+
+def poll(f: Callable[[], Optional[T]], what: str, timeout: float) -> T:
+    """Calls ``f`` every 50 ms until it gives a value other than None; fails naming ``what`` after ``timeout`` s."""
+    deadline = time.monotonic() + timeout
+    while True:
+        v = f()
+        if v is not None:
+            return v
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out waiting for {what}")
+        time.sleep(0.05)
 
 
 def shiftd_binary() -> Path:

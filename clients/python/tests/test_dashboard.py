@@ -40,6 +40,7 @@ from shift_client.keys import KeySpace
 from shift_client.robot import peer_config
 
 from conftest import REPO_ROOT, Daemon
+from conftest import poll as conftest_poll
 
 CHROMIUM = os.environ.get("SHIFT_CHROMIUM", "/usr/bin/chromium")
 CHROMIUM_ARGS = [
@@ -223,6 +224,42 @@ def write_room(folder: Path) -> Tuple[Path, Path]:
     return yaml, pgm
 
 
+def hold_the_worker(d: Daemon, auth: Dict[str, str]) -> List[str]:
+    """Uploads a 60 m × 60 m hall at 0.05 m with a lattice of pillars (1.44 M cells: seconds to plan even in a
+    release build) as site ``dash-hall`` and queues two plans on it; returns their ids. The first is planning
+    when this returns, so a plan posted next waits behind both on a one-worker daemon."""
+    n = 1200
+    pillar = lambda c: (c // 20) % 6 == 3  # noqa: E731 (1 m pillars every 6 m)
+    rows = []
+    for r in range(n):
+        row = bytearray(254 for _ in range(n))
+        if r < 4 or r >= n - 4:
+            row = bytearray(n)
+        else:
+            row[0:4] = bytes(4)
+            row[n - 4 : n] = bytes(4)
+            if pillar(r):
+                for c in range(4, n - 4):
+                    if pillar(c):
+                        row[c] = 0
+        rows.append(bytes(row))
+    files = {
+        "yaml": ("hall.yaml", b"image: hall.pgm\nresolution: 0.05\norigin: [0.0, 0.0, 0.0]\nnegate: 0\n"
+                 b"occupied_thresh: 0.65\nfree_thresh: 0.196\n", "application/yaml"),
+        "image": ("hall.pgm", f"P5\n{n} {n}\n255\n".encode() + b"".join(rows), "application/octet-stream"),
+    }
+    r = httpx.post(f"{d.url}/v1/sites/dash-hall/map", files=files, headers=auth, timeout=60.0)
+    assert r.status_code in (200, 201), r.text
+    ids = []
+    for _ in range(2):
+        body = {"site": "dash-hall", "start": [1.0, 1.0], "robot": {"radius": 0.15, "tool_width": 0.3}}
+        r = httpx.post(f"{d.url}/v1/plans", json=body, headers=auth, timeout=10.0)
+        assert r.status_code == 202, r.text
+        ids.append(r.json()["plan_id"])
+    poll(lambda: api_get(d, f"/v1/plans/{ids[0]}")["status"] == "planning" or None, "the hall being planned", 30)
+    return ids
+
+
 Pt = Tuple[float, float]
 
 
@@ -275,14 +312,8 @@ def api_get(daemon: Daemon, path: str) -> Any:
 
 
 def poll(f: Callable[[], Optional[T]], what: str, timeout: float = LONG) -> T:
-    deadline = time.monotonic() + timeout
-    while True:
-        v = f()
-        if v is not None:
-            return v
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what}")
-        time.sleep(0.05)
+    """:func:`conftest.poll` with this module's default timeout."""
+    return conftest_poll(f, what, timeout)
 
 
 def check_served_files(daemon: Daemon) -> None:
@@ -597,19 +628,27 @@ def test_actions_ask_for_the_token_show_the_api_message_and_never_put_it_in_a_ur
         tab.wait(lambda s: s["pathPoints"] > 0, "its path drawn", LONG)
         shots.append(tab.screenshot(artefacts, "11-token-accepted.png"))
 
-        # Cancel from the page: a plan queued behind two others (one worker), two clicks (no native dialog).
+        # Cancel from the page: a plan queued behind two others (one worker), two clicks (no native dialog). The
+        # two ahead plan a large pillared hall on another site, so the queued one stays queued however fast the
+        # machine is (a demo plan ahead of it drains in well under a second); they are cancelled afterwards.
         auth = {"authorization": f"Bearer {token}"}
-        for _ in range(3):
-            r = httpx.post(f"{d.url}/v1/plans", json=req, headers=auth, timeout=10.0)
-            assert r.status_code == 202, r.text
+        blockers = hold_the_worker(d, auth)
+        r = httpx.post(f"{d.url}/v1/plans", json=req, headers=auth, timeout=10.0)
+        assert r.status_code == 202, r.text
         queued = r.json()["plan_id"]
+        assert api_get(d, f"/v1/plans/{queued}")["status"] == "queued"
         page.locator(f"[data-testid=plan-row][data-plan='{queued}']").click()
-        tab.wait(lambda s: s["selectedPlan"] == queued and s["planStatus"] == "queued", "the queued plan selected", 10)
+        tab.wait(lambda s: s["selectedPlan"] == queued and s["planStatus"] == "queued", "the queued plan selected", 30)
         page.get_by_test_id("cancel-plan").click()
         page.get_by_test_id("cancel-plan").click()
         tab.wait(lambda s: s["planStatus"] == "cancelled", "the plan cancelled", 30)
         assert api_get(d, f"/v1/plans/{queued}")["status"] == "cancelled"
         assert page.get_by_test_id("cancel-plan").is_disabled()
+        assert [api_get(d, f"/v1/plans/{b}")["status"] for b in blockers] != ["ready", "ready"], "the worker was held"
+        for b in blockers:
+            httpx.delete(f"{d.url}/v1/plans/{b}", headers=auth, timeout=10.0)
+        for b in blockers:
+            poll(lambda b=b: api_get(d, f"/v1/plans/{b}")["status"] in ("cancelled", "ready") or None, f"{b} ended", 60)
 
         # A mission on the site shows up with its status, its robots' plans and coverage figures.
         mission = {

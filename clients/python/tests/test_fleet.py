@@ -23,6 +23,7 @@ from shift_client import (
 )
 
 from conftest import Daemon
+from conftest import poll as conftest_poll
 
 RADIUS = 0.15
 LONG = 120.0
@@ -36,15 +37,8 @@ def api(daemon: Daemon) -> Iterator[Client]:
 
 
 def poll(f: Callable[[], Optional[T]], what: str, timeout: float = LONG) -> T:
-    """Calls ``f`` every 50 ms until it gives a value other than None."""
-    deadline = time.monotonic() + timeout
-    while True:
-        v = f()
-        if v is not None:
-            return v
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what}")
-        time.sleep(0.05)
+    """:func:`conftest.poll` with this module's default timeout."""
+    return conftest_poll(f, what, timeout)
 
 
 def robot_alive(api: Client, name: str) -> Optional[bool]:

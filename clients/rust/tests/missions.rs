@@ -3,11 +3,13 @@
 //! by one robot over Zenoh; the site's coverage raster is read as JSON and as a PNG; `shiftctl mission …` and
 //! `shiftctl coverage` outputs are parsed back and compared with what the API serves.
 
+mod common;
+
 use std::collections::HashSet;
-use std::process::Output;
 use std::time::Duration;
 
-use anyhow::{Context, Result, bail, ensure};
+use anyhow::{Context, Result, bail};
+use common::{ctl, json, ok, refused};
 use serde_json::Value;
 use shift_client::Client;
 use shift_client::proto::{
@@ -27,47 +29,6 @@ fn robots() -> Vec<MissionRobot> {
         MissionRobot::new("r1", [1.0, 1.0], 0.15, 0.3),
         MissionRobot::new("r2", [7.0, 4.0], 0.15, 0.3),
     ]
-}
-
-/// Runs shiftctl with `args` against `base`; (exit code, stdout, stderr).
-async fn ctl(base: &str, args: &[&str]) -> Result<(i32, String, String)> {
-    let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_shiftctl"));
-    cmd.args(args).env("SHIFT_HTTP", base).env_remove("SHIFT_TOKEN");
-    let out: Output = tokio::task::spawn_blocking(move || cmd.output()).await??;
-    let code = out.status.code().context("shiftctl was killed")?;
-    Ok((
-        code,
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    ))
-}
-
-/// Runs shiftctl and expects exit 0; its stdout.
-async fn ok(base: &str, args: &[&str]) -> Result<String> {
-    let (code, out, err) = ctl(base, args).await?;
-    ensure!(code == 0, "shiftctl {args:?} exited {code}: {err}");
-    Ok(out)
-}
-
-/// Runs shiftctl with `--json` and parses its stdout.
-async fn json<T: serde::de::DeserializeOwned>(base: &str, args: &[&str]) -> Result<T> {
-    let mut all = vec!["--json"];
-    all.extend_from_slice(args);
-    let out = ok(base, &all).await?;
-    serde_json::from_str(&out).with_context(|| format!("shiftctl {args:?} printed {out}"))
-}
-
-/// Runs shiftctl with `--json`, expects exit 1 and the API error it prints on stderr: (status, code).
-async fn refused(base: &str, args: &[&str]) -> Result<(u64, String)> {
-    let mut all = vec!["--json"];
-    all.extend_from_slice(args);
-    let (code, _, err) = ctl(base, &all).await?;
-    ensure!(code == 1, "shiftctl {args:?} exited {code}: {err}");
-    let body: Value = serde_json::from_str(err.trim()).with_context(|| format!("stderr {err}"))?;
-    Ok((
-        body["status"].as_u64().context("status")?,
-        body["error"]["code"].as_str().context("code")?.to_owned(),
-    ))
 }
 
 fn swept(grid: &OccupancyGridDoc) -> usize {

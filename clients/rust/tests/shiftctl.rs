@@ -1,46 +1,20 @@
 //! `shiftctl` end to end: every command runs as the real binary against a daemon started in-process on
 //! 127.0.0.1; outputs are parsed back and compared with what the API serves.
 
+mod common;
+
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
-use std::process::Output;
 use std::time::Duration;
 
 use anyhow::{Context, Result, bail, ensure};
+use common::{ctl, json, ok};
 use serde_json::Value;
 use shift_client::Client;
 use shift_client::proto::{
     PlanAccepted, PlanDocument, PlanList, PlanStatus, PlanStatusResponse, SiteList, SiteSummary, WaypointKindDoc,
 };
 use shift_tests::{TestServer, test_config};
-
-/// Runs shiftctl with `args` against `base`; (exit code, stdout, stderr).
-async fn ctl(base: &str, args: &[&str]) -> Result<(i32, String, String)> {
-    let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_shiftctl"));
-    cmd.args(args).env("SHIFT_HTTP", base).env_remove("SHIFT_TOKEN");
-    let out: Output = tokio::task::spawn_blocking(move || cmd.output()).await??;
-    let code = out.status.code().context("shiftctl was killed")?;
-    Ok((
-        code,
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    ))
-}
-
-/// Runs shiftctl and expects exit 0; its stdout.
-async fn ok(base: &str, args: &[&str]) -> Result<String> {
-    let (code, out, err) = ctl(base, args).await?;
-    ensure!(code == 0, "shiftctl {args:?} exited {code}: {err}");
-    Ok(out)
-}
-
-/// Runs shiftctl with `--json` and parses its stdout.
-async fn json<T: serde::de::DeserializeOwned>(base: &str, args: &[&str]) -> Result<T> {
-    let mut all = vec!["--json"];
-    all.extend_from_slice(args);
-    let out = ok(base, &all).await?;
-    serde_json::from_str(&out).with_context(|| format!("shiftctl {args:?} printed {out}"))
-}
 
 fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -1,26 +1,16 @@
 //! `shiftctl` with fields in WGS84, as the real binary against a daemon on 127.0.0.1: a GeoJSON field uploaded
 //! from a file, a plan from a start in lon/lat, the path exported as GeoJSON in lon/lat.
 
-use std::process::Output;
+mod common;
+
 use std::time::Duration;
 
 use anyhow::{Context, Result, ensure};
+use common::ctl;
 use serde_json::{Value, json};
 use shift_client::Client;
 use shift_tests::field::{LAT0, LON0, inside, ll, ring};
 use shift_tests::{TestServer, test_config};
-
-async fn ctl(base: &str, args: &[&str]) -> Result<(i32, String, String)> {
-    let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_shiftctl"));
-    cmd.args(args).env("SHIFT_HTTP", base).env_remove("SHIFT_TOKEN");
-    let out: Output = tokio::task::spawn_blocking(move || cmd.output()).await??;
-    let code = out.status.code().context("shiftctl was killed")?;
-    Ok((
-        code,
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    ))
-}
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_field_from_a_file_plans_from_lon_lat_and_exports_geojson_in_lon_lat() -> Result<()> {
