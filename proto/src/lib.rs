@@ -16,6 +16,7 @@ pub mod mission;
 pub mod plan;
 pub mod ros;
 pub mod scene;
+pub mod terrain;
 
 pub use api::{
     AssignRequest, ErrorBody, ErrorDetail, LastCorrection, PlanAccepted, PlanEvent, PlanObjective, PlanOptions,
@@ -33,3 +34,7 @@ pub use mission::{
 };
 pub use plan::{PlanDocument, PlanMetricsDoc, RegionDoc, WaypointDoc, WaypointKindDoc};
 pub use scene::SceneFile;
+pub use terrain::{
+    CloudSourceDoc, DroneMetricsDoc, GroundDoc, QuantilesDoc, RobotKindDoc, SurfaceDoc, TerrainDoc,
+    TerrainPlanDocument, TerrainUploadQuery,
+};

@@ -8,6 +8,7 @@
 
 pub mod allocator;
 pub mod clock;
+pub mod cloud;
 pub mod config;
 pub mod demo;
 pub mod engine_loop;
@@ -21,10 +22,12 @@ pub mod pools;
 pub mod record;
 pub mod render;
 pub mod render_fleet;
+pub mod render_terrain;
 pub mod replay;
 pub mod scene_io;
 pub mod server;
 pub mod store;
+pub mod terrain_cli;
 pub mod views;
 pub mod watch;
 

@@ -145,6 +145,8 @@ struct PlanArgs {
     /// Also render the plan to this PNG.
     #[arg(long)]
     render: Option<PathBuf>,
+    #[command(flatten)]
+    terrain: shiftd::terrain_cli::TerrainArgs,
 }
 
 #[derive(clap::Args)]
@@ -313,6 +315,19 @@ async fn shutdown_signal() {
 fn cmd_plan(args: PlanArgs) -> Result<()> {
     let limits = SpeedLimits::new(args.v_min, args.v_max, args.a_max);
     limits.validate().context("speed limits (--v-min, --v-max, --a-max)")?;
+    if args.terrain.terrain.is_some() {
+        let common = shiftd::terrain_cli::TerrainCommon {
+            tool_width_m: args.tool_width,
+            robot_radius_m: args.robot_radius,
+            start: args.start,
+            limits,
+            attribute: args.attribute.clone(),
+            seed: args.seed,
+            out: args.out.clone(),
+            render: args.render.clone(),
+        };
+        return Ok(shiftd::terrain_cli::run(&args.terrain, &common)?);
+    }
     let (grid, start, robot, mut warnings, scene_attribute) = if let Some(dir) = &args.scene {
         let s = load_scene(dir)?;
         let robot = RobotShape {
@@ -331,7 +346,7 @@ fn cmd_plan(args: PlanArgs) -> Result<()> {
         };
         (m.grid, start, robot, m.warnings, None)
     } else {
-        bail!("give --scene DIR or --map FILE.yaml");
+        bail!("give --scene DIR, --map FILE.yaml or --terrain CLOUD");
     };
     let attribute = match args.attribute.as_ref().or(scene_attribute.as_ref()) {
         Some(path) => Some(load_attribute(path, grid.geometry)?),

@@ -129,7 +129,7 @@ pub(crate) fn pale((r, g, b): (u8, u8, u8)) -> (u8, u8, u8) {
 }
 
 /// Red (slow, f = 0) through yellow and cyan to blue (fast, f = 1).
-fn speed_colour(f: f64) -> RGBColor {
+pub(crate) fn speed_colour(f: f64) -> RGBColor {
     let f = if f.is_finite() { f.clamp(0.0, 1.0) } else { 0.0 };
     let stops = [
         (200.0, 0.0, 0.0),
@@ -146,7 +146,7 @@ fn speed_colour(f: f64) -> RGBColor {
 }
 
 /// The colour bar right of the map: v_min at the bottom, v_max at the top, labelled in m/s.
-fn colour_bar<DB: DrawingBackend>(
+pub(crate) fn colour_bar<DB: DrawingBackend>(
     root: &DrawingArea<DB, plotters::coord::Shift>,
     x0: u32,
     h: u32,

@@ -32,6 +32,8 @@ pub mod request;
 pub mod robots;
 pub mod sensors;
 pub mod site;
+pub mod terrain_plan;
+pub mod terrain_site;
 pub mod watch;
 
 pub use coverage::{CoverageKey, CoverageRecord};

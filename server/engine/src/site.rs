@@ -10,7 +10,10 @@ use shift_planner::map::DistanceField;
 use shift_planner::map::grid::OccupancyGrid;
 use shift_planner::map::json_grid::JsonGrid;
 use shift_planner::map::ros::{MapYaml, grid_from_image};
+use shift_planner::terrain::TerrainSurface;
 use shift_proto::{FieldRequest, GeoReference, SiteSummary};
+
+use crate::terrain_site::TerrainSite;
 
 use crate::error::{EngineError, Result};
 
@@ -36,6 +39,11 @@ pub enum MapSource {
         /// The upload as sent.
         request: FieldRequest,
     },
+    /// A point cloud's smoothed elevation map and ground-robot limits (`POST /v1/sites/{site}/terrain`).
+    Terrain {
+        /// The elevation map and limits.
+        terrain: Box<TerrainSite>,
+    },
 }
 
 /// A parsed site map.
@@ -50,6 +58,8 @@ pub struct SiteMap {
     pub warnings: Vec<String>,
     /// Where its frame lies on the earth (fields only).
     pub georef: Option<GeoReference>,
+    /// The ground's height (terrain sites only): plans and corrections get their waypoints' z from it.
+    pub elevation: Option<Arc<TerrainSurface>>,
 }
 
 impl SiteMap {
@@ -61,6 +71,7 @@ impl SiteMap {
             clearance: Arc::new(clearance),
             warnings,
             georef: None,
+            elevation: None,
         }
     }
 }
@@ -83,6 +94,12 @@ impl MapSource {
                 let field = crate::field::load(request)?;
                 let mut map = SiteMap::new(field.grid, field.warnings);
                 map.georef = Some(field.georef);
+                Ok(map)
+            }
+            Self::Terrain { terrain } => {
+                let (grid, surface, remark) = terrain.parse()?;
+                let mut map = SiteMap::new(grid, vec![remark]);
+                map.elevation = Some(Arc::new(surface));
                 Ok(map)
             }
         }
@@ -183,7 +200,7 @@ pub fn validate_name(what: &'static str, name: &str) -> Result<()> {
 }
 
 /// Image bytes as a hex string in the JSON the store keeps (compact enough for maps, dependency-free).
-mod bytes_as_hex {
+pub(crate) mod bytes_as_hex {
     use serde::{Deserialize, Deserializer, Serializer};
 
     pub fn serialize<S: Serializer>(bytes: &[u8], s: S) -> Result<S::Ok, S::Error> {

@@ -15,3 +15,4 @@ mod http_api;
 mod listings;
 mod missions;
 mod record_replay;
+mod terrain;

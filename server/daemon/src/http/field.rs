@@ -7,7 +7,7 @@ use axum::extract::{Path, State};
 use axum::http::StatusCode;
 use serde_json::{Value, json};
 use shift_engine::field::frame::LocalFrame;
-use shift_engine::{Event, LoadedSite, MapSource, SiteRecord};
+use shift_engine::{MapSource, SiteRecord};
 use shift_proto::{ErrorBody, FieldRequest, PlanDocument, SiteSummary};
 
 use super::AppState;
@@ -35,16 +35,7 @@ pub async fn upload_field(
         source: MapSource::Field { request },
         updated_ms: state.clock.now_ms(),
     };
-    let loaded = tokio::task::spawn_blocking(move || LoadedSite::parse(record))
-        .await
-        .map_err(|_| ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, "internal", "field reader stopped"))??;
-    let reply = state.engine.call(Event::MapUploaded { site: loaded }).await?;
-    let summary = reply
-        .sites
-        .into_iter()
-        .next()
-        .ok_or_else(|| ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, "internal", "no site summary"))?;
-    Ok((StatusCode::CREATED, ApiJson(summary)))
+    super::sites::store_site(&state, record, "field reader").await
 }
 
 /// The local frame of a geo-referenced site; `field` names the request field that needs it.

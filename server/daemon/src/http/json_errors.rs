@@ -19,9 +19,11 @@ pub struct BodyLimits {
 }
 
 impl BodyLimits {
-    /// Whether `path` is the map upload route (the one with the large limit).
+    /// Whether `path` is a site upload route (map, field, terrain: the ones with the large limit).
     pub fn is_map_upload(method: &Method, path: &str) -> bool {
-        method == Method::POST && path.starts_with("/v1/sites/") && path.ends_with("/map")
+        method == Method::POST
+            && path.starts_with("/v1/sites/")
+            && ["/map", "/field", "/terrain"].iter().any(|end| path.ends_with(end))
     }
 
     fn message(&self, method: &Method, path: &str) -> String {

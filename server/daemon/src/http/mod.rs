@@ -23,6 +23,7 @@ pub mod serve;
 mod site_events;
 mod sites;
 pub mod stall;
+mod terrain;
 pub mod token;
 
 use std::sync::Arc;
@@ -104,6 +105,10 @@ pub fn router(state: AppState) -> Router {
         .route(
             "/v1/sites/{site}/field",
             limited(post(field::upload_field), state.body_limits.map_bytes),
+        )
+        .route(
+            "/v1/sites/{site}/terrain",
+            limited(post(terrain::upload_terrain), state.body_limits.map_bytes),
         )
         .route(
             "/v1/plans",

@@ -13,6 +13,7 @@ use utoipa::OpenApi;
         super::sites::upload_map,
         super::sites::get_site,
         super::field::upload_field,
+        super::terrain::upload_terrain,
         super::listings::list_sites,
         super::listings::get_site_map,
         super::listings::list_plans,

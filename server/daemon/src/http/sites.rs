@@ -79,15 +79,35 @@ pub async fn upload_map(
             "send multipart/form-data (yaml, image) or application/json",
         ));
     };
-    // Decoding a large image takes a while: off the async workers.
-    let record = SiteRecord {
-        site,
-        source,
-        updated_ms: state.clock.now_ms(),
-    };
+    store_site(
+        &state,
+        SiteRecord {
+            site,
+            source,
+            updated_ms: state.clock.now_ms(),
+        },
+        "map parser",
+    )
+    .await
+}
+
+/// Parses an uploaded site off the async workers (decoding a large image or rasterising a field takes a while),
+/// hands it to the engine, which replaces the site's map and stores it, and answers 201 with its summary.
+/// `parser` names the parsing step in the 500 that answers a parser that stopped.
+pub(super) async fn store_site(
+    state: &AppState,
+    record: SiteRecord,
+    parser: &str,
+) -> Result<(StatusCode, ApiJson<SiteSummary>), ApiError> {
     let loaded = tokio::task::spawn_blocking(move || LoadedSite::parse(record))
         .await
-        .map_err(|_| ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, "internal", "map parser stopped"))??;
+        .map_err(|_| {
+            ApiError::new(
+                StatusCode::INTERNAL_SERVER_ERROR,
+                "internal",
+                format!("{parser} stopped"),
+            )
+        })??;
     let reply = state.engine.call(Event::MapUploaded { site: loaded }).await?;
     let summary = reply
         .sites

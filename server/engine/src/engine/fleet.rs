@@ -338,6 +338,10 @@ impl Engine {
                 if rec.watch == Some(WatchHealth::Blocked) {
                     rec.watch = Some(WatchHealth::Watching);
                 }
+                let mut waypoints = p.waypoints;
+                if let Some(e) = self.sites.get(&rec.request.site).and_then(|s| s.map.elevation.as_ref()) {
+                    crate::terrain_site::set_ground_height(e, &mut waypoints);
+                }
                 let correction = CorrectionDoc {
                     plan_id: plan_id.to_owned(),
                     robot: robot.to_owned(),
@@ -345,7 +349,7 @@ impl Engine {
                     version: base_version + 1,
                     from: p.from,
                     to: p.to,
-                    waypoints: p.waypoints,
+                    waypoints,
                     reason: p.reason,
                     dt_after_s: p.dt_after_s,
                     skipped: p.skipped,

@@ -120,7 +120,11 @@ impl Engine {
         }
         rec.updated_ms = now_ms;
         match outcome {
-            JobOutcome::Planned { doc, warnings } => {
+            JobOutcome::Planned { mut doc, warnings } => {
+                // Terrain sites: each waypoint's z is the ground under it.
+                if let Some(e) = self.sites.get(&rec.request.site).and_then(|s| s.map.elevation.as_ref()) {
+                    crate::terrain_site::set_ground_height(e, &mut Arc::make_mut(&mut doc).waypoints);
+                }
                 rec.status = PlanStatus::Ready;
                 rec.progress = 1.0;
                 rec.version = doc.version;

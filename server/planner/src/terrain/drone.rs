@@ -41,6 +41,10 @@ pub struct DroneParams {
     pub station_spacing_m: f64,
     /// Lane axis.
     pub lanes: LaneChoice,
+    /// The region to cover: cells whose height was measured or filled at most this far from measured ones,
+    /// metres (∞: the whole grid). Lanes are flown from their first to their last station over the region, the
+    /// tool off over holes in it; an irregular tile is not flown where it has no data.
+    pub region_fill_m: f64,
 }
 
 impl Default for DroneParams {
@@ -50,6 +54,7 @@ impl Default for DroneParams {
             altitude_offset_m: 3.0,
             station_spacing_m: 0.0,
             lanes: LaneChoice::Auto,
+            region_fill_m: f64::INFINITY,
         }
     }
 }
@@ -70,6 +75,12 @@ impl DroneParams {
                 });
             }
         }
+        if self.region_fill_m.is_nan() || self.region_fill_m < 0.0 {
+            return Err(PlannerError::InvalidParam {
+                name: "region_fill_m",
+                reason: format!("must be ≥ 0 metres (∞ for the whole grid), got {}", self.region_fill_m),
+            });
+        }
         Ok(())
     }
 }
@@ -85,6 +96,13 @@ pub struct DronePlan {
     pub lane_s: Vec<Vec<f64>>,
     /// The whole flight: lanes in boustrophedon order joined by turns, each point (x, y, surface + offset).
     pub path: Vec<[f64; 3]>,
+    /// Per point of `path`: on a lane over the region (the tool works) rather than on a turn between lanes or
+    /// over a hole in the region.
+    pub on_lane: Vec<bool>,
+    /// Per lane: its first and last station over the region (the part flown); None for a lane not flown.
+    pub lane_span: Vec<Option<(usize, usize)>>,
+    /// Per surface cell: in the region to cover (within `region_fill_m` of measured ground).
+    pub region: Vec<bool>,
     /// Swath width on the surface, metres.
     pub tool_width_m: f64,
     /// Height over the surface, metres.
@@ -197,26 +215,64 @@ pub fn plan_lanes(surface: &TerrainSurface, params: &DroneParams) -> Result<Dron
         let z = surface.height_at(x, y).unwrap_or(f64::NAN);
         [x, y, z + params.altitude_offset_m]
     };
+    let region = region_mask(surface, params.region_fill_m);
+    let g = &surface.geometry;
+    let in_region = |t: f64, s: f64| {
+        let (x, y) = axis.point(t, s);
+        g.locate(crate::geom::Point2::new(x, y))
+            .is_some_and(|c| region[g.index(c)])
+    };
+    // Whether the swath at (t, s) reaches the region: its centre or either edge (half the tool width across in
+    // plan, which on a slope reaches a little beyond the swath on the surface).
+    let swath_in = |t: f64, s: f64| in_region(t, s) || in_region(t, s - w / 2.0) || in_region(t, s + w / 2.0);
+    // Each lane from its first to its last station whose swath reaches the region (None: it never does).
+    let lane_span: Vec<Option<(usize, usize)>> = lane_s
+        .iter()
+        .map(|lane| {
+            let inside = |&j: &usize| swath_in(stations[j], lane[j]);
+            Some((
+                (0..stations.len()).find(inside)?,
+                (0..stations.len()).rev().find(inside)?,
+            ))
+        })
+        .collect();
     let mut path = Vec::with_capacity(n * (stations.len() + 4));
-    for (k, lane) in lane_s.iter().enumerate() {
-        let order: Box<dyn Iterator<Item = usize>> = if k % 2 == 0 {
-            Box::new(0..stations.len())
+    let mut on_lane = Vec::with_capacity(path.capacity());
+    // (t, s) of the last point flown.
+    let mut last: Option<(f64, f64)> = None;
+    let mut forward = true;
+    for (lane, span) in lane_s.iter().zip(&lane_span) {
+        let Some((a, b)) = *span else { continue };
+        let order: Vec<usize> = if forward {
+            (a..=b).collect()
         } else {
-            Box::new((0..stations.len()).rev())
+            (a..=b).rev().collect()
         };
-        let mut first = true;
-        for j in order {
-            if first && k > 0 {
-                // The turn from the previous lane's end, along the edge station, every `spacing` metres.
-                let from = lane_s[k - 1][j];
-                let steps = ((lane[j] - from).abs() / spacing).ceil() as usize;
-                for q in 1..steps {
-                    path.push(lift(stations[j], from + (lane[j] - from) * q as f64 / steps as f64));
-                }
+        forward = !forward;
+        let (t0, s0) = (stations[order[0]], lane[order[0]]);
+        if let Some((pt, ps)) = last {
+            // The turn from the previous lane's end, straight in the parameter plane (along the edge station when
+            // both lanes reach it), every `spacing` metres, at the same offset over the ground.
+            let steps = ((t0 - pt).hypot(s0 - ps) / spacing).ceil() as usize;
+            for q in 1..steps {
+                let f = q as f64 / steps as f64;
+                path.push(lift(pt + (t0 - pt) * f, ps + (s0 - ps) * f));
+                on_lane.push(false);
             }
-            first = false;
-            path.push(lift(stations[j], lane[j]));
         }
+        for &j in &order {
+            path.push(lift(stations[j], lane[j]));
+            // Over a hole in the region (no data near) the tool is off.
+            on_lane.push(swath_in(stations[j], lane[j]));
+        }
+        let end = order[order.len() - 1];
+        last = Some((stations[end], lane[end]));
+    }
+    if path.is_empty() {
+        return Err(PlannerError::InvalidParam {
+            name: "region_fill_m",
+            reason: "no lane crosses the region (the cells within region_fill_m of measured ground)".into(),
+        });
     }
     if let Some(p) = path.iter().find(|p| !p[2].is_finite()) {
         return Err(PlannerError::NonFinite {
@@ -229,9 +285,18 @@ pub fn plan_lanes(surface: &TerrainSurface, params: &DroneParams) -> Result<Dron
         stations_t: stations,
         lane_s,
         path,
+        on_lane,
+        lane_span,
+        region,
         tool_width_m: w,
         altitude_offset_m: params.altitude_offset_m,
     })
+}
+
+/// Cells within `fill_m` metres of measured ground (all of them for ∞).
+pub fn region_mask(surface: &TerrainSurface, fill_m: f64) -> Vec<bool> {
+    let r = surface.geometry.resolution;
+    surface.fill_ring.iter().map(|&k| f64::from(k) * r <= fill_m).collect()
 }
 
 #[cfg(test)]

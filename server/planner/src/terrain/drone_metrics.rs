@@ -53,10 +53,12 @@ impl Quantiles {
 /// Metrics of a drone plan.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DroneMetrics {
-    /// Covered surface area / total surface area, in [0, 1].
+    /// Covered surface area of the region / its total surface area, in [0, 1] (the region: `DronePlan::region`).
     pub surface_coverage: f64,
     /// Covered surface area, m².
     pub covered_area_m2: f64,
+    /// Surface area swept more than once, counted once per extra swath, m² (DESIGN §6 overlap on the surface).
+    pub overlap_area_m2: f64,
     /// Surface area of the domain, m².
     pub total_area_m2: f64,
     /// |height over the surface − offset| along the path, metres.
@@ -86,7 +88,7 @@ fn lane_at(plan: &DronePlan, k: usize, t: f64) -> f64 {
 pub fn drone_metrics(surface: &TerrainSurface, mesh: &TerrainMesh, plan: &DronePlan) -> DroneMetrics {
     let g = surface.geometry;
     let half = plan.tool_width_m / 2.0 + 1e-9;
-    let (mut covered, mut total) = (0.0, 0.0);
+    let (mut covered, mut total, mut overlap) = (0.0, 0.0, 0.0);
     let mut spacings = Vec::new();
     // Cell-centre lines along the lanes' axis: along x means rows are the sections' t.
     let (lines, along) = match plan.axis {
@@ -104,7 +106,15 @@ pub fn drone_metrics(surface: &TerrainSurface, mesh: &TerrainMesh, plan: &DroneP
             LaneAxis::Y => centre.y,
         };
         let sec = Section::new(surface, plan.axis, t, g.resolution / 8.0);
+        // The lanes flown at this t (each from its first to its last station over the region).
+        let flown = |k: &usize| {
+            plan.lane_span.get(*k).copied().flatten().is_some_and(|(a, b)| {
+                let (lo, hi) = (plan.stations_t[a], plan.stations_t[b]);
+                t >= lo.min(hi) - 1e-9 && t <= lo.max(hi) + 1e-9
+            })
+        };
         let lane_arcs: Vec<f64> = (0..plan.lane_s.len())
+            .filter(flown)
             .map(|k| sec.arc_at(lane_at(plan, k, t)))
             .collect();
         spacings.extend(lane_arcs.windows(2).map(|w| w[1] - w[0]));
@@ -115,18 +125,21 @@ pub fn drone_metrics(surface: &TerrainSurface, mesh: &TerrainMesh, plan: &DroneP
                 LaneAxis::X => p.y,
                 LaneAxis::Y => p.x,
             };
+            if !plan.region.get(g.index(c)).copied().unwrap_or(true) {
+                continue;
+            }
             let arc = sec.arc_at(s);
             let area = surface.cell_area(g.index(c));
             total += area;
-            // Lane arcs increase with k: the nearest lane is next to the insertion point.
+            // Lane arcs increase with k: the lanes whose swath holds this point are a run around the insertion
+            // point.
             let k = lane_arcs.partition_point(|&v| v < arc);
-            let near = [k.checked_sub(1), (k < lane_arcs.len()).then_some(k)]
-                .into_iter()
-                .flatten()
-                .map(|k| (lane_arcs[k] - arc).abs())
-                .fold(f64::INFINITY, f64::min);
-            if near <= half {
+            let below = lane_arcs[..k].iter().rev().take_while(|&&v| arc - v <= half).count();
+            let above = lane_arcs[k..].iter().take_while(|&&v| v - arc <= half).count();
+            let swaths = below + above;
+            if swaths > 0 {
                 covered += area;
+                overlap += area * (swaths - 1) as f64;
             }
         }
     }
@@ -154,6 +167,7 @@ pub fn drone_metrics(surface: &TerrainSurface, mesh: &TerrainMesh, plan: &DroneP
     DroneMetrics {
         surface_coverage: if total > 0.0 { covered / total } else { 0.0 },
         covered_area_m2: covered,
+        overlap_area_m2: overlap,
         total_area_m2: total,
         altitude_error_m: Quantiles::of(errors),
         max_path_slope_rad: max_slope,

@@ -36,6 +36,7 @@ fn params(w: f64, lanes: LaneChoice) -> DroneParams {
         altitude_offset_m: 3.0,
         station_spacing_m: 0.0,
         lanes,
+        region_fill_m: f64::INFINITY,
     }
 }
 
@@ -167,5 +168,59 @@ fn bad_params_are_named_and_huge_plans_refused() {
             ..DroneParams::default()
         }),
         Some(PlannerError::TerrainTooLarge { field: "stations", .. })
+    ));
+}
+
+#[test]
+fn an_irregular_tile_is_flown_only_where_it_has_data() {
+    // 40 m × 20 m flat, but only a disc of radius 9 m around (20, 10) was measured; the rest is filled.
+    let g = GridGeometry::new(160, 80, 0.25, Point2::origin()).expect("geometry");
+    let mut s = TerrainSurface::from_fn(g, |_, _| 1.0).expect("surface");
+    for i in 0..g.len() {
+        let p = g.center_of(i);
+        let d = (p.x - 20.0).hypot(p.y - 10.0);
+        s.fill_ring[i] = ((d - 9.0).max(0.0) / 0.25).ceil() as u32;
+    }
+    let all = plan_lanes(&s, &params(2.0, LaneChoice::Auto)).expect("whole grid");
+    let disc = plan_lanes(
+        &s,
+        &DroneParams {
+            region_fill_m: 0.5,
+            ..params(2.0, LaneChoice::Auto)
+        },
+    )
+    .expect("disc");
+    // Every waypoint flown lies over the region or on a turn between lanes near it; lanes over the disc only.
+    let near = |p: &[f64; 3]| (p[0] - 20.0).hypot(p[1] - 10.0) < 9.5 + 2.0;
+    assert!(disc.path.iter().all(near), "a waypoint far from the data");
+    assert!(
+        disc.path.len() < all.path.len() / 2,
+        "{} of {}",
+        disc.path.len(),
+        all.path.len()
+    );
+    let mesh = TerrainMesh::new(&s).expect("mesh");
+    let m = drone_metrics(&s, &mesh, &disc);
+    // Coverage counts the region only, and all of it is swept.
+    let region_area = std::f64::consts::PI * 9.5f64.powi(2);
+    assert!(
+        (m.total_area_m2 - region_area).abs() < 0.1 * region_area,
+        "region {} m²",
+        m.total_area_m2
+    );
+    assert!(m.surface_coverage >= 0.99, "coverage {}", m.surface_coverage);
+    assert!(m.lane_spacing_m.p95 <= 2.0 + 1e-9);
+    assert!(matches!(
+        plan_lanes(
+            &s,
+            &DroneParams {
+                region_fill_m: f64::NAN,
+                ..DroneParams::default()
+            }
+        ),
+        Err(PlannerError::InvalidParam {
+            name: "region_fill_m",
+            ..
+        })
     ));
 }

@@ -26,6 +26,7 @@
 pub mod curvature;
 pub mod drone;
 pub mod drone_metrics;
+pub mod drone_speed;
 pub mod fill;
 pub mod grid;
 pub mod mesh;
@@ -38,6 +39,7 @@ pub mod traverse;
 pub use curvature::{CurvatureMap, Derivatives, FundamentalForms};
 pub use drone::{DroneParams, DronePlan, LaneChoice, plan_lanes};
 pub use drone_metrics::{DroneMetrics, Quantiles, drone_metrics};
+pub use drone_speed::{DroneProfile, profile_drone};
 pub use grid::{ElevationGrid, GridParams};
 pub use mesh::TerrainMesh;
 pub use profile::LaneAxis;

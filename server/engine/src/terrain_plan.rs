@@ -1,0 +1,306 @@
+//! Plans over point-cloud terrain (issue 23): points in metres → the planner's terrain pipeline (seed 000
+//! §IV.A–B) → a [`TerrainPlanDocument`]. The caller (the daemon's CLI or API) has read the file and says where
+//! the points came from ([`CloudSourceDoc`]); nothing here touches a file.
+//!
+//! - Drones and sprayers: the smoothed surface, lanes spaced by the tool width on the surface, 3-D waypoints at
+//!   the altitude offset, speeds from the RFICP law on the lanes ([`shift_planner::terrain::profile_drone`]).
+//! - Ground robots: slope, step and roughness limits make the surface an occupancy grid, and the ordinary
+//!   coverage pipeline plans on it; each waypoint's z is the ground height under it.
+
+use shift_planner::geom::Point2;
+use shift_planner::pipeline::{NoMonitor, PlanParams, plan_shaped};
+use shift_planner::space::{CoverageSpace, RobotShape};
+use shift_planner::speed::{AttributeMap, SpeedLimits, SpeedParams};
+use shift_planner::terrain::{
+    CurvatureMap, DroneParams, DroneProfile, GroundLimits, LaneChoice, Quantiles, SurfaceReport, TerrainParams,
+    TerrainSurface, Traversability, ground_occupancy, plan_drone, profile_drone,
+};
+use shift_proto::{
+    CloudSourceDoc, DroneMetricsDoc, GroundDoc, PlanDocument, PlanMetricsDoc, QuantilesDoc, RegionDoc, RobotKindDoc,
+    SurfaceDoc, TerrainDoc, TerrainPlanDocument, WaypointDoc, WaypointKindDoc,
+};
+
+use crate::error::EngineError;
+use crate::plan_doc::to_document;
+
+/// Interpolated ground farther than this many cells from any point is unknown to a ground robot.
+const GROUND_MAX_FILL_CELLS: f64 = 4.0;
+
+/// What to plan over a cloud.
+#[derive(Debug, Clone)]
+pub struct TerrainRequest {
+    /// Drone or ground robot.
+    pub kind: RobotKindDoc,
+    /// Swath width (on the surface for drones), metres.
+    pub tool_width_m: f64,
+    /// Height over the surface to fly at (drones), metres.
+    pub altitude_offset_m: f64,
+    /// Drones: the region flown is the ground measured or filled at most this far from measured points, metres
+    /// (∞: the whole grid).
+    pub region_fill_m: f64,
+    /// Gridding cell size, metres.
+    pub grid_m: f64,
+    /// Ground robots: the robot's radius, metres (default: half the tool width).
+    pub robot_radius_m: Option<f64>,
+    /// Ground robots: the start, map frame, metres (default: the traversable point nearest the cloud's
+    /// lower-left corner, in the largest traversable piece).
+    pub start: Option<Point2>,
+    /// Ground robots: what the robot can drive on.
+    pub ground: GroundLimits,
+    /// Speed limits (drones: along the 3-D path).
+    pub limits: SpeedLimits,
+    /// Attribute (dirtiness, dryness) on the map frame; lanes are slower where it is high.
+    pub attribute: Option<AttributeMap>,
+    /// Seed of the ground pipeline's random choices.
+    pub seed: u64,
+}
+
+/// A terrain plan and what it was made of (for renderings).
+#[derive(Debug)]
+pub struct TerrainPlanned {
+    /// The plan JSON.
+    pub doc: TerrainPlanDocument,
+    /// The smoothed, gap-free elevation map.
+    pub surface: TerrainSurface,
+    /// Curvature of the smoothed surface.
+    pub curvature: CurvatureMap,
+    /// Ground robots: cells that are obstacles under the limits.
+    pub blocked: Option<Vec<bool>>,
+}
+
+/// Plans over `points` (metres, map frame) from `source`.
+pub fn plan_terrain(
+    plan_id: &str,
+    points: &[[f64; 3]],
+    source: CloudSourceDoc,
+    req: &TerrainRequest,
+) -> Result<TerrainPlanned, EngineError> {
+    let mut terrain = TerrainParams::default();
+    terrain.grid.cell_m = req.grid_m;
+    match req.kind {
+        RobotKindDoc::Drone => plan_flight(plan_id, points, source, req, &terrain),
+        RobotKindDoc::Ground => plan_ground(plan_id, points, source, req, &terrain),
+    }
+}
+
+fn quantiles(q: &Quantiles) -> QuantilesDoc {
+    QuantilesDoc {
+        p5: q.p5,
+        p50: q.p50,
+        p95: q.p95,
+        max: q.max,
+    }
+}
+
+fn surface_doc(s: &TerrainSurface, report: &SurfaceReport) -> SurfaceDoc {
+    let (lo, hi) = s
+        .heights
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &z| {
+            (lo.min(z), hi.max(z))
+        });
+    SurfaceDoc {
+        width: s.geometry.width as u64,
+        height: s.geometry.height as u64,
+        z_range_m: [lo, hi],
+        outlier_cells: report.smooth.outlier.iter().filter(|&&o| o).count() as u64,
+        filled_cells: report.filled_cells as u64,
+    }
+}
+
+/// The surface's domain (cell centres) as a region polygon.
+fn domain_polygon(s: &TerrainSurface) -> Vec<[f64; 2]> {
+    let (lo, hi) = s.domain();
+    vec![[lo[0], lo[1]], [hi[0], lo[1]], [hi[0], hi[1]], [lo[0], hi[1]]]
+}
+
+fn plan_flight(
+    plan_id: &str,
+    points: &[[f64; 3]],
+    source: CloudSourceDoc,
+    req: &TerrainRequest,
+    terrain: &TerrainParams,
+) -> Result<TerrainPlanned, EngineError> {
+    let drone = DroneParams {
+        tool_width_m: req.tool_width_m,
+        altitude_offset_m: req.altitude_offset_m,
+        station_spacing_m: 0.0,
+        lanes: LaneChoice::Auto,
+        region_fill_m: req.region_fill_m,
+    };
+    let out = plan_drone(points, terrain, &drone)?;
+    let profile: DroneProfile = profile_drone(&out.plan, req.attribute.as_ref(), &req.limits)?;
+    let m = &out.metrics;
+    let waypoints: Vec<WaypointDoc> = out
+        .plan
+        .path
+        .iter()
+        .zip(&out.plan.on_lane)
+        .zip(profile.speed_mps.iter().zip(&profile.time_s))
+        .map(|((p, &lane), (&v, &t))| WaypointDoc {
+            x: p[0],
+            y: p[1],
+            z: p[2],
+            v,
+            t,
+            kind: if lane {
+                WaypointKindDoc::Cover
+            } else {
+                WaypointKindDoc::Transit
+            },
+            region: lane.then_some(0),
+        })
+        .collect();
+    let turns = turns_of(&waypoints);
+    let coverage_pct = 100.0 * m.surface_coverage;
+    let plan = PlanDocument {
+        plan_id: plan_id.to_owned(),
+        version: 1,
+        frame: "map".into(),
+        waypoints,
+        regions: vec![RegionDoc {
+            id: 0,
+            polygon: domain_polygon(&out.surface),
+        }],
+        metrics: PlanMetricsDoc {
+            coverage_pct,
+            overlap_pct: if m.covered_area_m2 > 0.0 {
+                100.0 * m.overlap_area_m2 / m.covered_area_m2
+            } else {
+                0.0
+            },
+            length_m: m.path_length_m,
+            turns,
+            collisions: 0,
+            duration_s: profile.duration_s(),
+            compute_ms: 0.0,
+            coverable_area_m2: Some(m.total_area_m2),
+            ..PlanMetricsDoc::default()
+        },
+    };
+    let curvature = CurvatureMap::new(&out.surface.heights, &out.surface.geometry)?;
+    let doc = TerrainPlanDocument {
+        plan,
+        terrain: TerrainDoc {
+            robot_kind: RobotKindDoc::Drone,
+            source,
+            grid_m: req.grid_m,
+            altitude_offset_m: Some(req.altitude_offset_m),
+            surface: surface_doc(&out.surface, &out.report),
+            drone: Some(DroneMetricsDoc {
+                surface_coverage_pct: coverage_pct,
+                surface_area_m2: m.total_area_m2,
+                altitude_error_m: quantiles(&m.altitude_error_m),
+                max_path_slope_deg: m.max_path_slope_rad.to_degrees(),
+                lane_spacing_m: quantiles(&m.lane_spacing_m),
+                tool_width_m: req.tool_width_m,
+                lanes: m.lanes as u64,
+            }),
+            ground: None,
+        },
+    };
+    Ok(TerrainPlanned {
+        doc,
+        surface: out.surface,
+        curvature,
+        blocked: None,
+    })
+}
+
+/// Heading changes of 30° or more in the horizontal (DESIGN §6 turns).
+fn turns_of(w: &[WaypointDoc]) -> u64 {
+    let mut turns = 0;
+    let mut last: Option<f64> = None;
+    for pair in w.windows(2) {
+        let (dx, dy) = (pair[1].x - pair[0].x, pair[1].y - pair[0].y);
+        if dx.hypot(dy) < 1e-9 {
+            continue;
+        }
+        let h = dy.atan2(dx);
+        if let Some(prev) = last {
+            let mut d = (h - prev).abs() % std::f64::consts::TAU;
+            if d > std::f64::consts::PI {
+                d = std::f64::consts::TAU - d;
+            }
+            if d >= 30f64.to_radians() {
+                turns += 1;
+            }
+        }
+        last = Some(h);
+    }
+    turns
+}
+
+fn plan_ground(
+    plan_id: &str,
+    points: &[[f64; 3]],
+    source: CloudSourceDoc,
+    req: &TerrainRequest,
+    terrain: &TerrainParams,
+) -> Result<TerrainPlanned, EngineError> {
+    let out = ground_occupancy(points, terrain, &req.ground, GROUND_MAX_FILL_CELLS * req.grid_m)?;
+    let g = out.occupancy.geometry;
+    let robot = RobotShape {
+        radius_m: req.robot_radius_m.unwrap_or(req.tool_width_m / 2.0),
+        tool_width_m: req.tool_width_m,
+    };
+    let (lo, hi) = out.surface.domain();
+    let (start, snap) = match req.start {
+        Some(p) => (p, None),
+        // The lower-left corner, moved into the largest traversable piece wherever that is.
+        None => (Point2::new(lo[0], lo[1]), Some((hi[0] - lo[0]).hypot(hi[1] - lo[1]))),
+    };
+    let blocked: Vec<bool> = (0..g.len()).map(|i| !out.occupancy.is_free(i)).collect();
+    let space = CoverageSpace::with_start_snap(out.occupancy, robot, start, snap)?;
+    let params = PlanParams {
+        seed: req.seed,
+        limits: req.limits,
+        ..PlanParams::default()
+    };
+    let speed = SpeedParams::new(req.limits, req.tool_width_m);
+    let attribute = match &req.attribute {
+        Some(a) if a.geometry() == &g => Some(a.clone()),
+        Some(_) => {
+            return Err(EngineError::InvalidRequest(
+                "attribute: its grid must match the terrain grid (give it as blobs)".into(),
+            ));
+        }
+        None => None,
+    };
+    let (plan, profile) = plan_shaped(&space, &params, attribute.as_ref(), &speed, &mut NoMonitor)?;
+    let mut doc = to_document(plan_id, (&space, &plan), &profile, attribute.is_some(), 0.0);
+    let mut max_slope = 0.0f64;
+    let trav: &Traversability = &out.traversability;
+    crate::terrain_site::set_ground_height(&out.surface, &mut doc.waypoints);
+    for w in &doc.waypoints {
+        if let Some(c) = g.locate(Point2::new(w.x, w.y)) {
+            max_slope = max_slope.max(trav.slope_rad[g.index(c)]);
+        }
+    }
+    let blocked_pct = 100.0 * blocked.iter().filter(|&&b| b).count() as f64 / g.len().max(1) as f64;
+    let curvature = CurvatureMap::new(&out.surface.heights, &out.surface.geometry)?;
+    let doc = TerrainPlanDocument {
+        plan: doc,
+        terrain: TerrainDoc {
+            robot_kind: RobotKindDoc::Ground,
+            source,
+            grid_m: req.grid_m,
+            altitude_offset_m: None,
+            surface: surface_doc(&out.surface, &out.report),
+            drone: None,
+            ground: Some(GroundDoc {
+                max_slope_deg: req.ground.max_slope_rad.to_degrees(),
+                max_step_m: req.ground.max_step_m,
+                max_roughness_m: req.ground.max_roughness_m,
+                blocked_pct,
+                max_path_slope_deg: max_slope.to_degrees(),
+            }),
+        },
+    };
+    Ok(TerrainPlanned {
+        doc,
+        surface: out.surface,
+        curvature,
+        blocked: Some(blocked),
+    })
+}
