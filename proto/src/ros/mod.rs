@@ -22,7 +22,7 @@ pub use laser_scan::{LaserScan, decode_laser_scan, encode_laser_scan, scan_point
 pub use odometry::{
     OdomJson, Odometry, Pose2Stamped, decode_odom_payload, decode_odometry, encode_odom_json, encode_odometry,
 };
-pub use path::{Path, PoseStamped, decode_path, encode_path};
+pub use path::{Path, PoseStamped, decode_path, encode_path, encode_plan_path};
 pub use point_cloud2::{
     CloudXyz, PointCloud2, PointField, cloud_xyz, decode_cloud_xyz, decode_point_cloud2, encode_point_cloud2,
     encode_point_cloud2_xyz,

@@ -10,7 +10,7 @@
 use std::sync::Arc;
 
 use shift_proto::keys::KeySpace;
-use shift_proto::ros::path::{encode_path, plan_poses};
+use shift_proto::ros::path::encode_plan_path;
 use shift_proto::ros::{Header, Time};
 use shift_proto::{CorrectionDoc, PlanDocument, PlanStatusResponse};
 use tokio::sync::mpsc;
@@ -106,7 +106,7 @@ async fn put(session: &zenoh::Session, keys: &KeySpace, msg: Outgoing) {
                 stamp: Time { sec: 0, nanosec: 0 },
                 frame_id: doc.frame.clone(),
             };
-            let cdr = encode_path(&header, &plan_poses(&doc));
+            let cdr = encode_plan_path(&header, &doc);
             let put = session.put(&path_key, cdr).encoding(Encoding::APPLICATION_CDR);
             if let Err(e) = put.congestion_control(CongestionControl::Block).await {
                 tracing::warn!(robot, "publishing the ROS path: {e}");
