@@ -9,8 +9,8 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use shift_engine::{
-    Event, JobOutcome, LiveMaps, MissionJob, MissionOutcome, PlanJob, planned_outcome, run_job, run_mission_job,
-    to_document,
+    Event, JobOutcome, LiveMaps, MissionJob, MissionOutcome, PlanJob, planned_outcome, run_job,
+    run_mission_job_monitored, to_document,
 };
 use shift_planner::PlannerError;
 use shift_planner::geom::Point2;
@@ -18,6 +18,18 @@ use shift_planner::pipeline::{PlanMonitor, RegionSummary};
 use shift_proto::RegionReady;
 
 use crate::engine_loop::handle::{EngineHandle, Msg};
+
+/// A mission job's view of its stop flags: cancelled by the operator or interrupted by a shutdown.
+struct StopFlags<'a> {
+    cancel: &'a AtomicBool,
+    interrupt: &'a AtomicBool,
+}
+
+impl PlanMonitor for StopFlags<'_> {
+    fn cancelled(&self) -> bool {
+        self.cancel.load(Ordering::Relaxed) || self.interrupt.load(Ordering::Relaxed)
+    }
+}
 
 /// Spawns jobs and holds their cancel flags.
 #[derive(Debug)]
@@ -132,19 +144,25 @@ impl JobRunner {
     }
 
     /// Starts a mission job: the site divided among the fleet and every part planned, as one job on the plan
-    /// pool. It cannot stop half-way (division and its planning rounds run to the end); a cancel or a shutdown
-    /// takes effect when it ends (the engine ignores the outcome of a cancelled mission).
+    /// pool. A cancel (its flag is the mission id's) or a shutdown stops it between and within the parts' plans;
+    /// the engine ignores the outcome of a cancelled mission.
     pub fn start_mission(&mut self, mut job: MissionJob) {
         let to_engine = self.to_engine.clone();
         let overlay = self.overlay.clone();
         let interrupt = self.interrupt.clone();
+        let cancel = Arc::new(AtomicBool::new(false));
+        self.cancels.insert(job.mission_id.clone(), cancel.clone());
         self.pool.spawn(move || {
             if let Some(live) = overlay {
                 job.overlay = live_overlay(&live, &job.request.site);
             }
             let mission_id = job.mission_id.clone();
             let t = Instant::now();
-            let result = std::panic::catch_unwind(AssertUnwindSafe(|| run_mission_job(&job)));
+            let mut monitor = StopFlags {
+                cancel: &cancel,
+                interrupt: &interrupt,
+            };
+            let result = std::panic::catch_unwind(AssertUnwindSafe(|| run_mission_job_monitored(&job, &mut monitor)));
             let compute_ms = t.elapsed().as_secs_f64() * 1e3;
             let outcome = match result {
                 _ if interrupt.load(Ordering::Relaxed) => MissionOutcome::Interrupted,
@@ -152,6 +170,10 @@ impl JobRunner {
                     metrics::histogram!("shift_mission_compute_seconds").record(compute_ms / 1e3);
                     planned_outcome(&job, &fleet, compute_ms)
                 }
+                // The engine has marked the mission cancelled and ignores this.
+                Ok(Err(PlannerError::Cancelled)) => MissionOutcome::Failed {
+                    reason: "cancelled".into(),
+                },
                 Ok(Err(e)) => MissionOutcome::Failed { reason: e.to_string() },
                 Err(_) => {
                     tracing::error!(mission_id, "mission job panicked");

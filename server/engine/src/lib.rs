@@ -43,7 +43,7 @@ pub use job::{JobResult, PlanJob, attribute_map, run_job};
 pub use live_map::{LiveMap, LiveMapParams, LiveMapStats};
 pub use live_maps::{LiveMaps, SiteLive};
 pub use mission::MissionRecord;
-pub use mission_job::{MissionJob, MissionOutcome, planned_outcome, run_mission_job};
+pub use mission_job::{MissionJob, MissionOutcome, planned_outcome, run_mission_job, run_mission_job_monitored};
 pub use plan::PlanRecord;
 pub use plan_doc::to_document;
 pub use pose_history::{PoseHistory, PoseHistoryParams, PoseLookupError};

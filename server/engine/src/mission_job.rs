@@ -9,9 +9,9 @@ use serde::{Deserialize, Serialize};
 use shift_planner::divide::FleetRobot;
 use shift_planner::geom::Point2;
 use shift_planner::map::grid::OccupancyGrid;
-use shift_planner::pipeline::PlanParams;
-use shift_planner::pipeline::fleet::{FleetParams, FleetPlan, plan_fleet};
+use shift_planner::pipeline::fleet::{FleetParams, FleetPlan, plan_fleet_monitored};
 use shift_planner::pipeline::remainder::plan_fleet_remainder;
+use shift_planner::pipeline::{NoMonitor, PlanMonitor, PlanParams};
 use shift_planner::remainder::RemainderParams;
 use shift_planner::space::RobotShape;
 use shift_planner::speed::SpeedLimits;
@@ -77,6 +77,12 @@ pub enum MissionOutcome {
 
 /// Divides and plans (see the module docs).
 pub fn run_mission_job(job: &MissionJob) -> shift_planner::Result<FleetPlan> {
+    run_mission_job_monitored(job, &mut NoMonitor)
+}
+
+/// [`run_mission_job`] watched by `monitor`: a cancel stops the division's planning rounds and the part being
+/// planned, with [`shift_planner::PlannerError::Cancelled`].
+pub fn run_mission_job_monitored(job: &MissionJob, monitor: &mut dyn PlanMonitor) -> shift_planner::Result<FleetPlan> {
     let mut grid = (*job.grid).clone();
     let robots: Vec<FleetRobot> = job
         .request
@@ -113,7 +119,14 @@ pub fn run_mission_job(job: &MissionJob) -> shift_planner::Result<FleetPlan> {
         None => None,
     };
     match &job.covered {
-        None => plan_fleet(&grid, &robots, &params, attribute.as_ref(), &FleetParams::default()),
+        None => plan_fleet_monitored(
+            &grid,
+            &robots,
+            &params,
+            attribute.as_ref(),
+            &FleetParams::default(),
+            monitor,
+        ),
         Some(covered) => Ok(plan_fleet_remainder(
             &grid,
             &robots,
@@ -121,6 +134,7 @@ pub fn run_mission_job(job: &MissionJob) -> shift_planner::Result<FleetPlan> {
             (&params, &RemainderParams::default()),
             attribute.as_ref(),
             &FleetParams::default(),
+            monitor,
         )?
         .fleet),
     }

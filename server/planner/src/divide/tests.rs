@@ -190,6 +190,40 @@ fn fleet_plans_cover_the_site_with_balanced_durations_and_a_thin_seam() {
     }
 }
 
+#[test]
+fn a_cancelled_fleet_plan_stops_within_its_part_plans() {
+    use crate::pipeline::PlanMonitor;
+    use crate::pipeline::fleet::plan_fleet_monitored;
+    /// Cancels after `polls` looks: the first part's plan is well under way by then.
+    struct CancelAfter {
+        polls: std::cell::Cell<usize>,
+    }
+    impl PlanMonitor for CancelAfter {
+        fn cancelled(&self) -> bool {
+            let n = self.polls.get();
+            self.polls.set(n.saturating_sub(1));
+            n == 0
+        }
+    }
+    let (grid, _) = corridor_with_rooms();
+    let robots = [robot(1.0, 1.0), robot(15.0, 1.0), robot(29.0, 1.0)];
+    let params = PlanParams {
+        threads: 1,
+        ..PlanParams::default()
+    };
+    for polls in [0, 1, 5, 50] {
+        let mut monitor = CancelAfter {
+            polls: std::cell::Cell::new(polls),
+        };
+        let out = plan_fleet_monitored(&grid, &robots, &params, None, &FleetParams::default(), &mut monitor);
+        assert!(
+            matches!(out, Err(crate::PlannerError::Cancelled)),
+            "after {polls} polls: {:?}",
+            out.map(|f| f.rounds)
+        );
+    }
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(16))]
     /// On random cluttered rooms with random docks, every division keeps its invariants.

@@ -10,10 +10,10 @@
 //! the best round is kept.
 
 use crate::divide::{DivideParams, Division, FleetRobot, divide_within};
-use crate::error::Result;
+use crate::error::{PlannerError, Result};
 use crate::map::OccupancyGrid;
 use crate::metrics::CoverageRaster;
-use crate::pipeline::{NoMonitor, PlanOutput, PlanParams, plan_shaped};
+use crate::pipeline::{NoMonitor, PlanMonitor, PlanOutput, PlanParams, plan_shaped};
 use crate::space::CoverageSpace;
 use crate::speed::attribute::AttributeMap;
 use crate::speed::{SpeedParams, SpeedProfile};
@@ -81,7 +81,39 @@ pub fn plan_fleet(
     attribute: Option<&AttributeMap>,
     fleet: &FleetParams,
 ) -> Result<FleetPlan> {
-    plan_fleet_with(grid, robots, params, attribute, fleet, None, &mut |_, _, _| Ok(None))
+    plan_fleet_monitored(grid, robots, params, attribute, fleet, &mut NoMonitor)
+}
+
+/// [`plan_fleet`] watched by `monitor`: a cancel stops it between parts (and within a part's plan), with
+/// [`crate::PlannerError::Cancelled`].
+pub fn plan_fleet_monitored(
+    grid: &OccupancyGrid,
+    robots: &[FleetRobot],
+    params: &PlanParams,
+    attribute: Option<&AttributeMap>,
+    fleet: &FleetParams,
+    monitor: &mut dyn PlanMonitor,
+) -> Result<FleetPlan> {
+    plan_fleet_with(
+        grid,
+        robots,
+        params,
+        attribute,
+        fleet,
+        None,
+        &mut |_, _, _| Ok(None),
+        monitor,
+    )
+}
+
+/// Passes a fleet monitor's cancel on to one part's plan, and none of that plan's progress (a part's regions are
+/// not the fleet's).
+struct CancelOnly<'a>(&'a mut dyn PlanMonitor);
+
+impl PlanMonitor for CancelOnly<'_> {
+    fn cancelled(&self) -> bool {
+        self.0.cancelled()
+    }
 }
 
 /// Replaces a part's space before it is planned: called with the round (from 1), the robot's index and its
@@ -99,8 +131,12 @@ pub(super) fn plan_fleet_with(
     fleet: &FleetParams,
     only: Option<&[bool]>,
     refine: &mut RefinePart<'_>,
+    monitor: &mut dyn PlanMonitor,
 ) -> Result<FleetPlan> {
     let mut plan_round = |calibration: &[f64], round: usize| -> Result<FleetPlan> {
+        if monitor.cancelled() {
+            return Err(PlannerError::Cancelled);
+        }
         let mut division = divide_within(grid, robots, attribute, Some(calibration), &fleet.divide, only)?;
         let mut refined = false;
         for (k, part) in division.parts.iter_mut().enumerate() {
@@ -124,7 +160,16 @@ pub(super) fn plan_fleet_with(
                 attribute_range: attribute.and_then(|a| a.range_over(&division.coverable)),
                 ..SpeedParams::new(robot.limits, robot.shape.tool_width_m)
             };
-            plans.push(plan_shaped(&part.space, &p, attribute, &speed, &mut NoMonitor)?);
+            if monitor.cancelled() {
+                return Err(PlannerError::Cancelled);
+            }
+            plans.push(plan_shaped(
+                &part.space,
+                &p,
+                attribute,
+                &speed,
+                &mut CancelOnly(&mut *monitor),
+            )?);
         }
         let metrics = fleet_metrics(&division, &plans);
         Ok(FleetPlan {

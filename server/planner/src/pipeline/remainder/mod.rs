@@ -119,6 +119,7 @@ pub fn plan_fleet_remainder(
     (params, remainder_params): (&PlanParams, &RemainderParams),
     attribute: Option<&AttributeMap>,
     fleet: &FleetParams,
+    monitor: &mut dyn PlanMonitor,
 ) -> Result<FleetRemainderPlan> {
     remainder_params.validate()?;
     if covered.len() != grid.cells.len() {
@@ -150,6 +151,7 @@ pub fn plan_fleet_remainder(
             rounds[round - 1].push(rem);
             Ok(Some(space))
         },
+        monitor,
     )?;
     let remainders = rounds
         .into_iter()

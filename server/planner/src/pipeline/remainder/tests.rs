@@ -222,6 +222,7 @@ fn fleet_replans_the_remainder() {
         (&PlanParams::default(), &RemainderParams::default()),
         None,
         &FleetParams::default(),
+        &mut crate::pipeline::NoMonitor,
     )
     .expect("fleet replan");
     assert_eq!(out.remainders.len(), 2);
