@@ -15,10 +15,11 @@ static ALLOCATOR: tikv_jemallocator::Jemalloc = tikv_jemallocator::Jemalloc;
 use clap::{Parser, Subcommand};
 use shift_engine::to_document;
 use shift_planner::decompose::DecompositionMethod;
+use shift_planner::footprint::Footprint;
 use shift_planner::geom::Point2;
 use shift_planner::order::OrderMethod;
 use shift_planner::pattern::PatternMethod;
-use shift_planner::pipeline::{NoMonitor, Objective, PlanParams, plan_shaped};
+use shift_planner::pipeline::{NoMonitor, Objective, PlanParams, plan_footprinted, plan_shaped};
 use shift_planner::space::{CoverageSpace, RobotShape};
 use shift_planner::speed::{SpeedLimits, SpeedParams};
 use shiftd::eval::{TABLE_HEADER, run_eval, table_line};
@@ -101,6 +102,11 @@ struct PlanArgs {
     /// Robot radius, metres.
     #[arg(long)]
     robot_radius: Option<f64>,
+    /// A robot that is not a disc: its convex footprint in the robot frame (Nav2's convention: x forward,
+    /// metres, origin where it turns), "X,Y;X,Y;…", e.g. "0.6,0.4;-0.6,0.4;-0.6,-0.4;0.6,-0.4". Instead of
+    /// --robot-radius.
+    #[arg(long, conflicts_with = "robot_radius", allow_hyphen_values = true)]
+    footprint: Option<String>,
     /// Tool width, metres.
     #[arg(long)]
     tool_width: Option<f64>,
@@ -164,6 +170,17 @@ struct EvalArgs {
     /// 2,3,4): one row per scene and size with the fleet's durations, coverage and seam overlap.
     #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(usize))]
     robots: Vec<usize>,
+}
+
+/// "X,Y;X,Y;…" → vertices, metres.
+fn parse_polygon(s: &str) -> Result<Vec<[f64; 2]>> {
+    s.split(';')
+        .filter(|v| !v.trim().is_empty())
+        .map(|v| {
+            let p = parse_xy(v).map_err(anyhow::Error::msg)?;
+            Ok([p.x, p.y])
+        })
+        .collect()
 }
 
 fn parse_xy(s: &str) -> Result<Point2, String> {
@@ -328,10 +345,16 @@ fn cmd_plan(args: PlanArgs) -> Result<()> {
         };
         return Ok(shiftd::terrain_cli::run(&args.terrain, &common)?);
     }
-    let (grid, start, robot, mut warnings, scene_attribute) = if let Some(dir) = &args.scene {
+    let footprint = match &args.footprint {
+        Some(text) => Some(Footprint::new(&parse_polygon(text).context("--footprint")?).context("--footprint")?),
+        None => None,
+    };
+    // With a footprint the radius is set from it once the map's resolution is known.
+    let radius = args.robot_radius.or(footprint.as_ref().map(|_| 0.0));
+    let (grid, start, mut robot, mut warnings, scene_attribute) = if let Some(dir) = &args.scene {
         let s = load_scene(dir)?;
         let robot = RobotShape {
-            radius_m: args.robot_radius.unwrap_or(s.scene.robot_radius),
+            radius_m: radius.unwrap_or(s.scene.robot_radius),
             tool_width_m: args.tool_width.unwrap_or(s.scene.tool_width),
         };
         let start = args.start.unwrap_or(Point2::new(s.scene.start[0], s.scene.start[1]));
@@ -341,7 +364,7 @@ fn cmd_plan(args: PlanArgs) -> Result<()> {
         let m = load_map(map)?;
         let start = args.start.context("--start X,Y is required with --map")?;
         let robot = RobotShape {
-            radius_m: args.robot_radius.context("--robot-radius is required with --map")?,
+            radius_m: radius.context("--robot-radius or --footprint is required with --map")?,
             tool_width_m: args.tool_width.context("--tool-width is required with --map")?,
         };
         (m.grid, start, robot, m.warnings, None)
@@ -352,6 +375,11 @@ fn cmd_plan(args: PlanArgs) -> Result<()> {
         Some(path) => Some(load_attribute(path, grid.geometry)?),
         None => None,
     };
+    if let Some(f) = &footprint {
+        // Planned in the space of its inscribed planning radius; the band up to its circumscribed disc is decided
+        // by heading (planner::pipeline::footprinted).
+        robot.radius_m = f.planning_radius_m(grid.geometry.resolution);
+    }
     let t = Instant::now();
     let space = CoverageSpace::with_start_snap(grid, robot, start, args.snap_start_m)?;
     let params = PlanParams {
@@ -367,7 +395,10 @@ fn cmd_plan(args: PlanArgs) -> Result<()> {
     if args.no_smooth {
         speed.smooth = None;
     }
-    let (out, profile) = plan_shaped(&space, &params, attribute.as_ref(), &speed, &mut NoMonitor)?;
+    let (out, profile) = match &footprint {
+        Some(f) => plan_footprinted(&space, f, &params, attribute.as_ref(), &speed, &mut NoMonitor)?,
+        None => plan_shaped(&space, &params, attribute.as_ref(), &speed, &mut NoMonitor)?,
+    };
     let ms = t.elapsed().as_secs_f64() * 1e3;
     warnings.extend(out.warnings.iter().cloned());
     for w in &warnings {

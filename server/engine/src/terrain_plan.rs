@@ -8,6 +8,7 @@
 //!   coverage pipeline plans on it; each waypoint's z is the ground height under it.
 
 use shift_planner::geom::Point2;
+use shift_planner::metrics::count_turns;
 use shift_planner::pipeline::{NoMonitor, PlanParams, plan_shaped};
 use shift_planner::space::{CoverageSpace, RobotShape};
 use shift_planner::speed::{AttributeMap, SpeedLimits, SpeedParams};
@@ -22,9 +23,6 @@ use shift_proto::{
 
 use crate::error::EngineError;
 use crate::plan_doc::to_document;
-
-/// Interpolated ground farther than this many cells from any point is unknown to a ground robot.
-const GROUND_MAX_FILL_CELLS: f64 = 4.0;
 
 /// What to plan over a cloud.
 #[derive(Debug, Clone)]
@@ -151,7 +149,9 @@ fn plan_flight(
             region: lane.then_some(0),
         })
         .collect();
-    let turns = turns_of(&waypoints);
+    // DESIGN §6 turns, in the horizontal.
+    let flat: Vec<Point2> = waypoints.iter().map(|w| Point2::new(w.x, w.y)).collect();
+    let turns = count_turns(&flat) as u64;
     let coverage_pct = 100.0 * m.surface_coverage;
     let plan = PlanDocument {
         plan_id: plan_id.to_owned(),
@@ -207,30 +207,6 @@ fn plan_flight(
     })
 }
 
-/// Heading changes of 30° or more in the horizontal (DESIGN §6 turns).
-fn turns_of(w: &[WaypointDoc]) -> u64 {
-    let mut turns = 0;
-    let mut last: Option<f64> = None;
-    for pair in w.windows(2) {
-        let (dx, dy) = (pair[1].x - pair[0].x, pair[1].y - pair[0].y);
-        if dx.hypot(dy) < 1e-9 {
-            continue;
-        }
-        let h = dy.atan2(dx);
-        if let Some(prev) = last {
-            let mut d = (h - prev).abs() % std::f64::consts::TAU;
-            if d > std::f64::consts::PI {
-                d = std::f64::consts::TAU - d;
-            }
-            if d >= 30f64.to_radians() {
-                turns += 1;
-            }
-        }
-        last = Some(h);
-    }
-    turns
-}
-
 fn plan_ground(
     plan_id: &str,
     points: &[[f64; 3]],
@@ -238,7 +214,12 @@ fn plan_ground(
     req: &TerrainRequest,
     terrain: &TerrainParams,
 ) -> Result<TerrainPlanned, EngineError> {
-    let out = ground_occupancy(points, terrain, &req.ground, GROUND_MAX_FILL_CELLS * req.grid_m)?;
+    let out = ground_occupancy(
+        points,
+        terrain,
+        &req.ground,
+        f64::from(crate::terrain_site::MAX_FILL_CELLS) * req.grid_m,
+    )?;
     let g = out.occupancy.geometry;
     let robot = RobotShape {
         radius_m: req.robot_radius_m.unwrap_or(req.tool_width_m / 2.0),
