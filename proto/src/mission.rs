@@ -16,8 +16,13 @@ pub struct MissionRobot {
     pub id: String,
     /// Start and return point (the dock), metres, map frame.
     pub start: [f64; 2],
-    /// Footprint radius, metres.
+    /// Footprint radius, metres (a disc robot). 0 or absent when `footprint` is given.
+    #[serde(default)]
     pub radius: f64,
+    /// Footprint polygon instead of `radius` (a robot that is not a disc), as in a plan request's `robot`:
+    /// `[[x, y], …]` in the robot frame, Nav2's convention, convex.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub footprint: Option<Vec<[f64; 2]>>,
     /// Tool width, metres.
     pub tool_width: f64,
     /// Slowest cover speed, m/s.
@@ -38,6 +43,7 @@ impl MissionRobot {
             id: id.into(),
             start,
             radius,
+            footprint: None,
             tool_width,
             v_min: default_v_min(),
             v_max: default_v_max(),
@@ -45,11 +51,20 @@ impl MissionRobot {
         }
     }
 
+    /// The radius of the disc it never leaves: its `radius`, or its footprint's farthest vertex from the
+    /// origin, metres.
+    pub fn outer_radius(&self) -> f64 {
+        match &self.footprint {
+            Some(poly) => poly.iter().map(|v| v[0].hypot(v[1])).fold(0.0, f64::max),
+            None => self.radius,
+        }
+    }
+
     /// Its shape and limits as a plan request names them.
     pub fn spec(&self) -> RobotSpec {
         RobotSpec {
             radius: self.radius,
-            footprint: None,
+            footprint: self.footprint.clone(),
             tool_width: self.tool_width,
             v_min: self.v_min,
             v_max: self.v_max,

@@ -94,6 +94,7 @@ pub fn run_fleet_eval(
                     start,
                     shape: space.robot,
                     limits,
+                    footprint: None,
                 })
                 .collect();
             let t = Instant::now();

@@ -40,7 +40,7 @@ enum Command {
     /// a demo site).
     Serve(ServeArgs),
     /// Plan one coverage path and write the plan JSON (DESIGN §5.1).
-    Plan(PlanArgs),
+    Plan(Box<PlanArgs>),
     /// Evaluate every decomposition × order and the baselines on a folder of scenes.
     Eval(EvalArgs),
     /// Replay an MCAP recording onto Zenoh with its original timing, or through the engine (--into-engine).
@@ -206,7 +206,7 @@ fn main() -> ExitCode {
         .init();
     let result = match cli.command {
         Command::Serve(args) => cmd_serve(args),
-        Command::Plan(args) => cmd_plan(args),
+        Command::Plan(args) => cmd_plan(*args),
         Command::Eval(args) => cmd_eval(args),
         Command::Replay(args) => shiftd::replay::run_cli(args).map_err(anyhow::Error::from),
         Command::Demo(args) => cmd_demo(args),

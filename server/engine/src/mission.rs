@@ -248,14 +248,14 @@ pub fn validate_mission(req: &MissionRequest, grid: &OccupancyGrid) -> Result<Pa
         }
         for (j, o) in req.robots.iter().enumerate().take(i) {
             let d = (r.start[0] - o.start[0]).hypot(r.start[1] - o.start[1]);
-            if d < r.radius + o.radius {
+            let (ri, rj) = (r.outer_radius(), o.outer_radius());
+            if d < ri + rj {
                 return Err(invalid(format!(
-                    "robots[{i}].start is {d:.3} m from robots[{j}].start, closer than their radii ({} + {} m)",
-                    r.radius, o.radius
+                    "robots[{i}].start is {d:.3} m from robots[{j}].start, closer than their radii ({ri} + {rj} m)"
                 )));
             }
         }
-        footprints += 4.0 * std::f64::consts::PI * r.radius * r.radius;
+        footprints += 4.0 * std::f64::consts::PI * r.outer_radius().powi(2);
     }
     let free_m2 = grid.cells.iter().filter(|&&c| c == CellState::Free).count() as f64 * g.resolution * g.resolution;
     if footprints > free_m2 {

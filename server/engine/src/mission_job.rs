@@ -7,6 +7,7 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 use shift_planner::divide::FleetRobot;
+use shift_planner::footprint::Footprint;
 use shift_planner::geom::Point2;
 use shift_planner::map::grid::OccupancyGrid;
 use shift_planner::pipeline::fleet::{FleetParams, FleetPlan, plan_fleet_monitored};
@@ -84,24 +85,31 @@ pub fn run_mission_job(job: &MissionJob) -> shift_planner::Result<FleetPlan> {
 /// planned, with [`shift_planner::PlannerError::Cancelled`].
 pub fn run_mission_job_monitored(job: &MissionJob, monitor: &mut dyn PlanMonitor) -> shift_planner::Result<FleetPlan> {
     let mut grid = (*job.grid).clone();
-    let robots: Vec<FleetRobot> = job
-        .request
-        .robots
-        .iter()
-        .map(|r| FleetRobot {
-            start: Point2::new(r.start[0], r.start[1]),
-            shape: RobotShape {
-                radius_m: r.radius,
-                tool_width_m: r.tool_width,
-            },
-            limits: SpeedLimits::new(r.v_min, r.v_max, r.a_max),
+    let res = grid.geometry.resolution;
+    let robots: Vec<FleetRobot> = (job.request.robots.iter())
+        .map(|r| {
+            // A footprint plans in the space of its inscribed planning radius (as a single plan does).
+            let footprint = r.footprint.as_deref().map(Footprint::new).transpose()?;
+            Ok(FleetRobot {
+                start: Point2::new(r.start[0], r.start[1]),
+                shape: RobotShape {
+                    radius_m: footprint.as_ref().map_or(r.radius, |f| f.planning_radius_m(res)),
+                    tool_width_m: r.tool_width,
+                },
+                limits: SpeedLimits::new(r.v_min, r.v_max, r.a_max),
+                footprint,
+            })
         })
-        .collect();
+        .collect::<shift_planner::Result<_>>()?;
     if !job.overlay.is_empty() {
         // The live overlay must not block any dock (another robot standing there was seen by its neighbours).
         let mut keep: Vec<[f64; 2]> = job.overlay.clone();
         for r in &robots {
-            let clear = 2.0 * r.shape.radius_m + grid.geometry.resolution;
+            let outer = r
+                .footprint
+                .as_ref()
+                .map_or(r.shape.radius_m, Footprint::circumscribed_radius_m);
+            let clear = 2.0 * outer + grid.geometry.resolution;
             keep.retain(|p| (Point2::new(p[0], p[1]) - r.start).norm() >= clear);
         }
         apply_overlay(&mut grid, &keep, Point2::origin(), 0.0);

@@ -43,6 +43,7 @@ fn main() {
                     start: p,
                     shape,
                     limits: SpeedLimits::default(),
+                    footprint: None,
                 }
             })
             .collect();

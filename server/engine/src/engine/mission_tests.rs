@@ -500,3 +500,36 @@ fn a_mission_whose_division_fails_fails_its_plans() {
         Err(EngineError::MissionState { .. })
     ));
 }
+
+#[test]
+fn a_mission_robot_with_a_footprint_is_divided_and_planned_with_it() {
+    let mut e = engine(1, 4);
+    let mut req = mission_request();
+    req.robots[0].radius = 0.0;
+    req.robots[0].footprint = Some(vec![[0.12, 0.08], [-0.12, 0.08], [-0.12, -0.08], [0.12, -0.08]]);
+    let c = e
+        .handle(Event::MissionRequested { request: req.clone() }, 10)
+        .expect("accepted");
+    // The part's plan request carries the polygon: its watch and corrections check the robot by it.
+    let rec = e.plan("p-2").expect("part plan");
+    assert!(rec.request.robot.footprint.is_some());
+    let job = mission_job(&c).expect("started");
+    let fleet = run_mission_job(&job).expect("divides and plans");
+    let (_, profile) = &fleet.plans[0];
+    assert_eq!(
+        profile.metrics.collisions, 0,
+        "no footprint overlap: {:?}",
+        profile.metrics
+    );
+    assert!(profile.metrics.coverage_pct > 50.0, "{:?}", profile.metrics);
+    // A footprint that is not convex is refused naming the robot.
+    let mut bad = req;
+    bad.robots[0].footprint = Some(vec![[0.0, 0.0], [0.3, 0.0], [0.05, 0.05], [0.0, 0.3]]);
+    let err = e
+        .handle(Event::MissionRequested { request: bad }, 30)
+        .expect_err("refused");
+    assert!(
+        err.to_string().contains("robots[0]") && err.to_string().contains("footprint"),
+        "{err}"
+    );
+}

@@ -40,6 +40,7 @@ use crate::error::{PlannerError, Result};
 use crate::geom::Point2;
 use std::sync::Arc;
 
+use crate::footprint::Footprint;
 use crate::map::{Cell, DistanceField, OccupancyGrid};
 use crate::space::{CoverageSpace, RobotShape};
 use crate::speed::SpeedLimits;
@@ -49,14 +50,17 @@ use crate::speed::attribute::AttributeMap;
 pub const NO_OWNER: u32 = u32::MAX;
 
 /// One robot of the fleet as division sees it.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct FleetRobot {
     /// Its start (dock), map frame, metres.
     pub start: Point2,
-    /// Radius and tool width.
+    /// Radius and tool width (with a footprint: its planning radius, [`Footprint::planning_radius_m`]).
     pub shape: RobotShape,
     /// Its speed limits.
     pub limits: SpeedLimits,
+    /// A robot that is not a disc: its part is planned with the footprint
+    /// ([`crate::pipeline::plan_footprinted`]).
+    pub footprint: Option<Footprint>,
 }
 
 /// Knobs of [`divide`].

@@ -15,6 +15,7 @@ fn robot(x: f64, y: f64) -> FleetRobot {
             tool_width_m: 0.3,
         },
         limits: SpeedLimits::new(0.1, 0.6, 0.5),
+        footprint: None,
     }
 }
 

@@ -13,7 +13,7 @@ use crate::divide::{DivideParams, Division, FleetRobot, divide_within};
 use crate::error::{PlannerError, Result};
 use crate::map::OccupancyGrid;
 use crate::metrics::CoverageRaster;
-use crate::pipeline::{NoMonitor, PlanMonitor, PlanOutput, PlanParams, plan_shaped};
+use crate::pipeline::{NoMonitor, PlanMonitor, PlanOutput, PlanParams, plan_footprinted, plan_shaped};
 use crate::space::CoverageSpace;
 use crate::speed::attribute::AttributeMap;
 use crate::speed::{SpeedParams, SpeedProfile};
@@ -100,8 +100,7 @@ pub fn plan_fleet_monitored(
         params,
         attribute,
         fleet,
-        None,
-        &mut |_, _, _| Ok(None),
+        (None, &mut |_, _, _| Ok(None)),
         monitor,
     )
 }
@@ -129,8 +128,7 @@ pub(super) fn plan_fleet_with(
     params: &PlanParams,
     attribute: Option<&AttributeMap>,
     fleet: &FleetParams,
-    only: Option<&[bool]>,
-    refine: &mut RefinePart<'_>,
+    (only, refine): (Option<&[bool]>, &mut RefinePart<'_>),
     monitor: &mut dyn PlanMonitor,
 ) -> Result<FleetPlan> {
     let mut plan_round = |calibration: &[f64], round: usize| -> Result<FleetPlan> {
@@ -163,13 +161,11 @@ pub(super) fn plan_fleet_with(
             if monitor.cancelled() {
                 return Err(PlannerError::Cancelled);
             }
-            plans.push(plan_shaped(
-                &part.space,
-                &p,
-                attribute,
-                &speed,
-                &mut CancelOnly(&mut *monitor),
-            )?);
+            let mut part_monitor = CancelOnly(&mut *monitor);
+            plans.push(match &robot.footprint {
+                Some(f) => plan_footprinted(&part.space, f, &p, attribute, &speed, &mut part_monitor)?,
+                None => plan_shaped(&part.space, &p, attribute, &speed, &mut part_monitor)?,
+            });
         }
         let metrics = fleet_metrics(&division, &plans);
         Ok(FleetPlan {

@@ -141,8 +141,7 @@ pub fn plan_fleet_remainder(
         params,
         attribute,
         fleet,
-        Some(&uncovered),
-        &mut |round, _, part| {
+        (Some(&uncovered), &mut |round, _, part| {
             let rem = remainder(part, covered, remainder_params)?;
             let space = remainder_space(part, &rem, part.start)?;
             if rounds.len() < round {
@@ -150,7 +149,7 @@ pub fn plan_fleet_remainder(
             }
             rounds[round - 1].push(rem);
             Ok(Some(space))
-        },
+        }),
         monitor,
     )?;
     let remainders = rounds

@@ -213,6 +213,7 @@ fn fleet_replans_the_remainder() {
             start,
             shape: SHAPE,
             limits: SpeedLimits::default(),
+            footprint: None,
         })
         .collect();
     let out = plan_fleet_remainder(
