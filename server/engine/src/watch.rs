@@ -57,9 +57,8 @@ impl Default for WatchParams {
 }
 
 /// The radius the watch keeps clear for a plan's robot, metres: its `radius`, or for a footprint polygon its
-/// circumscribed radius — conservative: the judgment and the repair know discs only, and the disc holding
-/// the polygon is clear wherever the polygon is, at any heading (a robot that passes a doorway only
-/// lengthwise may see a correction there that a heading-aware check would not ask for).
+/// circumscribed radius — conservative towards new obstacles: the repair knows discs only, and the disc
+/// holding the polygon is clear wherever the polygon is, at any heading.
 pub fn clearance_radius_m(robot: &RobotSpec) -> f64 {
     robot
         .footprint
@@ -68,7 +67,27 @@ pub fn clearance_radius_m(robot: &RobotSpec) -> f64 {
         .map_or(robot.radius, |f| f.circumscribed_radius_m())
 }
 
+/// The clearance a plan of this robot keeps from the static map, metres: its `radius`, or for a footprint
+/// polygon its inscribed radius (the plan was checked against the static map by heading: a rectangle passes a
+/// doorway lengthwise, its centre closer to the jambs than its circumscribed radius). The judge holds the
+/// static map to this, so the plan's own passage is no breach; new obstacles must keep the circumscribed disc.
+pub fn static_radius_m(robot: &RobotSpec) -> f64 {
+    robot
+        .footprint
+        .as_deref()
+        .and_then(|v| Footprint::new(v).ok())
+        .map_or(robot.radius, |f| f.inscribed_radius_m())
+}
+
 impl WatchParams {
+    /// The planner's parameters for a plan's robot: the circumscribed disc against new obstacles, the plan's
+    /// own clearance against the static map ([`clearance_radius_m`], [`static_radius_m`]).
+    pub fn correct_params_for(&self, robot: &RobotSpec) -> CorrectParams {
+        let mut p = self.correct_params(clearance_radius_m(robot));
+        p.static_radius_m = static_radius_m(robot).clamp(f64::MIN_POSITIVE, p.robot_radius_m);
+        p
+    }
+
     /// The planner's parameters for a robot of `radius_m`.
     pub fn correct_params(&self, radius_m: f64) -> CorrectParams {
         let mut p = CorrectParams::for_robot(radius_m);
@@ -244,6 +263,35 @@ mod tests {
     use crate::site::MapSource;
 
     #[test]
+    fn a_rectangle_through_a_doorway_it_passes_lengthwise_is_no_breach_but_a_new_post_is() {
+        let rect = RobotSpec {
+            radius: 0.0,
+            footprint: Some(vec![[0.6, 0.4], [-0.6, 0.4], [-0.6, -0.4], [0.6, -0.4]]),
+            ..RobotSpec::new(0.15, 0.8)
+        };
+        let mut j = job(lane(), 3.0);
+        j.map = room_with_door();
+        // The jambs are 0.5 m from the lane: inside the circumscribed disc (0.72 m), outside the inscribed one.
+        j.params = WatchParams::default().correct_params(clearance_radius_m(&rect));
+        assert!(
+            !matches!(run_check(&j, None), CheckOutcome::Clear),
+            "a disc check sees the doorway as a breach"
+        );
+        j.params = WatchParams::default().correct_params_for(&rect);
+        assert!((j.params.static_radius_m - 0.4).abs() < 1e-12);
+        assert!(
+            matches!(run_check(&j, None), CheckOutcome::Clear),
+            "the plan's own passage"
+        );
+        // A post on the lane past the door still breaks it.
+        let live = post(5.5, 2.0);
+        assert!(
+            !matches!(run_check(&j, Some(&live)), CheckOutcome::Clear),
+            "a new obstacle on the lane"
+        );
+    }
+
+    #[test]
     fn a_footprint_is_watched_with_its_circumscribed_radius() {
         let disc = RobotSpec::new(0.15, 0.3);
         assert_eq!(clearance_radius_m(&disc), 0.15);
@@ -257,11 +305,21 @@ mod tests {
 
     /// An open 8 m × 4 m room at 0.05 m with a wall ring.
     fn room() -> SiteMap {
+        room_with(|_, _| false)
+    }
+
+    /// The room with a wall across it at x = 4 m and a door 1.0 m wide in it, y from 1.5 to 2.5 m.
+    fn room_with_door() -> SiteMap {
+        room_with(|r, c| c == 80 && !(30..50).contains(&r))
+    }
+
+    /// The room with more walls where `wall(row, column)` says so.
+    fn room_with(wall: impl Fn(usize, usize) -> bool) -> SiteMap {
         let (w, h) = (160usize, 80usize);
         let cells: Vec<String> = (0..w * h)
             .map(|i| {
                 let (r, c) = (i / w, i % w);
-                if r == 0 || c == 0 || r + 1 == h || c + 1 == w {
+                if r == 0 || c == 0 || r + 1 == h || c + 1 == w || wall(r, c) {
                     "100"
                 } else {
                     "0"

@@ -279,7 +279,7 @@ impl Engine {
             ahead_from: a.index,
             pose,
             map: site.map.clone(),
-            params: self.config.watch.correct_params(crate::watch::clearance_radius_m(spec)),
+            params: self.config.watch.correct_params_for(spec),
             limits: PatchLimits {
                 v_min_mps: spec.v_min,
                 v_max_mps: spec.v_max,

@@ -94,7 +94,7 @@ pub fn judge(path: &[Point2], ahead_from: usize, robot: Point2, world: &World<'_
     let mut run: Option<Breach> = None;
     let close = |run: &mut Option<Breach>, out: &mut Vec<Breach>| {
         if let Some(b) = run.take()
-            && (b.cost > p.j_threshold || b.min_clearance_m < p.robot_radius_m)
+            && (b.cost > p.j_threshold || b.min_clearance_m < p.static_radius_m)
         {
             out.push(b);
         }
@@ -130,14 +130,15 @@ pub fn judge(path: &[Point2], ahead_from: usize, robot: Point2, world: &World<'_
                 break 'walk;
             }
             // The plan was made on the static map: its own distance to walls (often exactly the radius) is
-            // no breach; only new (live) obstacles must keep d_safe, and the static map only the radius.
+            // no breach; only new (live) obstacles must keep d_safe, and the static map only the clearance
+            // the plan keeps from it (the radius; a footprint's inscribed radius).
             let (c_live, c_static) = if world.inside(q) {
                 (world.live_clearance(q), world.static_clearance_upto(q, d_safe))
             } else {
                 (0.0, 0.0)
             };
             let c = c_live.min(c_static);
-            let static_short = p.robot_radius_m - STATIC_SLACK_M - c_static;
+            let static_short = p.static_radius_m - STATIC_SLACK_M - c_static;
             let deficit = ((d_safe - c_live).max(static_short).max(0.0) / p.margin_m).powi(2);
             let e = deficit + if j == 0 { kappa_term } else { 0.0 };
             let pos = PathPos::new(k, t.min(1.0));

@@ -7,6 +7,11 @@ use super::error::CorrectError;
 pub struct CorrectParams {
     /// Robot radius, metres: the hard clearance every returned path keeps (> 0).
     pub robot_radius_m: f64,
+    /// Clearance the plan itself keeps from the static map, metres (in (0, robot_radius_m]; default
+    /// `robot_radius_m`). A footprint robot's plan is checked against the static map by heading, so its centre
+    /// passes a doorway closer than its circumscribed radius; the judge asks the static map for this much and
+    /// new (live) obstacles for d_safe, so the plan's own passage is no breach.
+    pub static_radius_m: f64,
     /// Extra clearance wanted on top of the radius, metres (> 0, default 0.05): d_safe = radius + margin.
     pub margin_m: f64,
     /// Radius of the judged window around the robot, metres (default 3.0).
@@ -41,6 +46,7 @@ impl CorrectParams {
     pub fn for_robot(robot_radius_m: f64) -> Self {
         Self {
             robot_radius_m,
+            static_radius_m: robot_radius_m,
             margin_m: 0.05,
             window_radius_m: 3.0,
             max_curvature_per_m: f64::INFINITY,
@@ -62,12 +68,18 @@ impl CorrectParams {
 
     /// Checks every field's range (finite where a number must be).
     pub fn validate(&self) -> Result<(), CorrectError> {
-        let checks: [(&'static str, f64, bool, &str); 12] = [
+        let checks: [(&'static str, f64, bool, &str); 13] = [
             (
                 "robot_radius_m",
                 self.robot_radius_m,
                 self.robot_radius_m > 0.0 && self.robot_radius_m.is_finite(),
                 "must be > 0 m and finite",
+            ),
+            (
+                "static_radius_m",
+                self.static_radius_m,
+                self.static_radius_m > 0.0 && self.static_radius_m <= self.robot_radius_m,
+                "must be > 0 m and at most robot_radius_m",
             ),
             (
                 "margin_m",
