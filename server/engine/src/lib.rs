@@ -12,6 +12,7 @@
 //! the engine deterministically. [`sensors::SensorHub`] is driven by the daemon's ingest thread the same way
 //! (messages and the time in, placed points and drops out). No tokio, no sockets, no clock: time is passed in.
 
+pub(crate) mod bytes_as_hex;
 pub mod cell_mask;
 pub mod coverage;
 mod engine;

@@ -26,7 +26,7 @@ pub enum MapSource {
         /// YAML text.
         yaml: String,
         /// Image bytes.
-        #[serde(with = "bytes_as_hex")]
+        #[serde(with = "crate::bytes_as_hex")]
         image: Vec<u8>,
     },
     /// nav_msgs/OccupancyGrid-shaped JSON text.
@@ -197,37 +197,6 @@ pub fn validate_site_name(name: &str) -> Result<()> {
 /// Checks a name of `what` (`site`, `robot`) by the one name rule ([`shift_proto::keys::validate_name`]).
 pub fn validate_name(what: &'static str, name: &str) -> Result<()> {
     shift_proto::keys::validate_name(what, name).map_err(|e| EngineError::InvalidRequest(e.to_string()))
-}
-
-/// Image bytes as a hex string in the JSON the store keeps (compact enough for maps, dependency-free).
-pub(crate) mod bytes_as_hex {
-    use serde::{Deserialize, Deserializer, Serializer};
-
-    pub fn serialize<S: Serializer>(bytes: &[u8], s: S) -> Result<S::Ok, S::Error> {
-        const HEX: &[u8; 16] = b"0123456789abcdef";
-        let mut out = String::with_capacity(bytes.len() * 2);
-        for b in bytes {
-            out.push(char::from(HEX[usize::from(b >> 4)]));
-            out.push(char::from(HEX[usize::from(b & 15)]));
-        }
-        s.serialize_str(&out)
-    }
-
-    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<u8>, D::Error> {
-        let text = String::deserialize(d)?;
-        let digit = |c: u8| match c {
-            b'0'..=b'9' => Ok(c - b'0'),
-            b'a'..=b'f' => Ok(c - b'a' + 10),
-            _ => Err(serde::de::Error::custom("invalid hex digit")),
-        };
-        let raw = text.as_bytes();
-        if raw.len() % 2 != 0 {
-            return Err(serde::de::Error::custom("odd hex length"));
-        }
-        raw.chunks_exact(2)
-            .map(|p| Ok(digit(p[0])? << 4 | digit(p[1])?))
-            .collect()
-    }
 }
 
 #[cfg(test)]

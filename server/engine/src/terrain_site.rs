@@ -33,10 +33,10 @@ pub struct TerrainSite {
     /// Lower-left corner of the grid, map frame, metres.
     pub origin: [f64; 2],
     /// Smoothed heights, row-major, f32 little-endian, metres.
-    #[serde(with = "crate::site::bytes_as_hex")]
+    #[serde(with = "crate::bytes_as_hex")]
     pub heights_f32le: Vec<u8>,
     /// Per cell: 0 where points fell, k where filled k cells from data (saturating at 255).
-    #[serde(with = "crate::site::bytes_as_hex")]
+    #[serde(with = "crate::bytes_as_hex")]
     pub fill_ring: Vec<u8>,
     /// Steepest slope a robot drives, degrees.
     pub max_slope_deg: f64,
