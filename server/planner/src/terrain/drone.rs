@@ -16,6 +16,7 @@
 use super::profile::{LaneAxis, Section};
 use super::surface::TerrainSurface;
 use crate::error::{PlannerError, Result, finite};
+use crate::map::DistanceField;
 
 /// Most waypoints a drone plan may hold (lanes × stations plus turns).
 pub const MAX_WAYPOINTS: usize = 1 << 24;
@@ -293,10 +294,15 @@ pub fn plan_lanes(surface: &TerrainSurface, params: &DroneParams) -> Result<Dron
     })
 }
 
-/// Cells within `fill_m` metres of measured ground (all of them for ∞).
+/// Cells whose centre lies within `fill_m` metres (Euclidean) of a measured cell's centre (all of them for ∞).
 pub fn region_mask(surface: &TerrainSurface, fill_m: f64) -> Vec<bool> {
-    let r = surface.geometry.resolution;
-    surface.fill_ring.iter().map(|&k| f64::from(k) * r <= fill_m).collect()
+    if fill_m.is_infinite() {
+        return vec![true; surface.geometry.len()];
+    }
+    let measured = DistanceField::compute(surface.geometry, |i| surface.fill_ring[i] == 0, false);
+    (0..surface.geometry.len())
+        .map(|i| measured.at(i) <= fill_m + 1e-9)
+        .collect()
 }
 
 #[cfg(test)]
