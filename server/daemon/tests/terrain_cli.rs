@@ -50,6 +50,26 @@ fn plan_of(output: &Output, out: &Path) -> TerrainPlanDocument {
     serde_json::from_str(&std::fs::read_to_string(out).expect("written")).expect("terrain plan JSON")
 }
 
+/// The drone bars: surface coverage ≥ 98 %, altitude error p95 ≤ 0.2 m, lane spacing on the surface
+/// p5/p95 within ±15 % of the tool width.
+fn meets_the_surface_bars(d: &shift_proto::DroneMetricsDoc, tool_width_m: f64) {
+    assert!(
+        d.surface_coverage_pct >= 98.0,
+        "surface coverage {}",
+        d.surface_coverage_pct
+    );
+    assert!(
+        d.altitude_error_m.p95 <= 0.2,
+        "altitude error p95 {}",
+        d.altitude_error_m.p95
+    );
+    let (p5, p95) = (d.lane_spacing_m.p5, d.lane_spacing_m.p95);
+    assert!(
+        p5 >= 0.85 * tool_width_m && p95 <= 1.15 * tool_width_m,
+        "lane spacing p5 {p5} p95 {p95} for a {tool_width_m} m tool"
+    );
+}
+
 fn png_size(p: &Path) -> (u32, u32) {
     image::image_dimensions(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
 }
@@ -94,22 +114,7 @@ fn autzen_plans_for_a_drone_with_3d_waypoints_on_the_surface() {
     );
     // Seed 000 §IV.B figures at a 0.5 m grid.
     let d = t.drone.expect("drone metrics");
-    assert!(
-        d.surface_coverage_pct >= 98.0,
-        "surface coverage {}",
-        d.surface_coverage_pct
-    );
-    assert!(
-        d.altitude_error_m.p95 <= 0.2,
-        "altitude error p95 {}",
-        d.altitude_error_m.p95
-    );
-    assert!(
-        d.lane_spacing_m.p5 >= 0.85 * 5.0 && d.lane_spacing_m.p95 <= 1.15 * 5.0,
-        "lane spacing p5 {} p95 {}",
-        d.lane_spacing_m.p5,
-        d.lane_spacing_m.p95
-    );
+    meets_the_surface_bars(&d, 5.0);
     // 3-D waypoints: z follows the ground (it varies by metres over the tile) 3 m above it; times increase.
     let w = &doc.plan.waypoints;
     let (zlo, zhi) = w
@@ -263,22 +268,7 @@ fn an_unseen_rotated_ply_tile_plans_for_a_drone_and_a_ground_robot() {
     );
     assert!(t.source.unit_source.contains("assumed"), "{}", t.source.unit_source);
     let d = t.drone.expect("drone metrics");
-    assert!(
-        d.surface_coverage_pct >= 98.0,
-        "surface coverage {}",
-        d.surface_coverage_pct
-    );
-    assert!(
-        d.altitude_error_m.p95 <= 0.2,
-        "altitude error p95 {}",
-        d.altitude_error_m.p95
-    );
-    assert!(
-        d.lane_spacing_m.p5 >= 0.85 * 4.0 && d.lane_spacing_m.p95 <= 1.15 * 4.0,
-        "lane spacing p5 {} p95 {}",
-        d.lane_spacing_m.p5,
-        d.lane_spacing_m.p95
-    );
+    meets_the_surface_bars(&d, 4.0);
     // The strip covers 40 % of its bounding box: the corners without data are not flown (region = ground
     // within twice the tool width of points, plus half a swath).
     let w = &doc.plan.waypoints;
