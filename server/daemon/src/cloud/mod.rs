@@ -11,6 +11,7 @@ mod geokeys;
 mod las;
 mod pcd;
 mod ply;
+pub mod source;
 mod units;
 
 pub use units::LengthUnit;

@@ -14,8 +14,8 @@ use shift_proto::{ErrorBody, SiteSummary, TerrainUploadQuery};
 use super::AppState;
 use super::error::{ApiError, ApiJson};
 use super::listings::query_pairs;
+use crate::cloud::source::source_doc;
 use crate::cloud::{CloudFormat, CloudLimits, GroundFilter, LengthUnit, LoadOptions, load_cloud};
-use crate::terrain_cli::source_doc;
 
 /// Grid cells the API accepts (a 2 km × 2 km tile at 0.5 m).
 const MAX_CELLS: f64 = 16e6;
