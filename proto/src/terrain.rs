@@ -126,6 +126,12 @@ pub struct DroneMetricsDoc {
     pub tool_width_m: f64,
     /// Lanes flown.
     pub lanes: u64,
+    /// Fastest climb along the timed path, m/s.
+    #[serde(default)]
+    pub max_climb_mps: f64,
+    /// Fastest descent along the timed path, m/s (positive).
+    #[serde(default)]
+    pub max_descent_mps: f64,
 }
 
 /// What a ground robot's limits made of the surface.

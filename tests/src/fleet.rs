@@ -181,11 +181,27 @@ impl ScriptedRobot {
             .map_err(|e| anyhow!("{e}"))
     }
 
+    /// Publishes JSON odometry (map frame) stamped `stamp_s` seconds on the robot's clock.
+    pub async fn odom_stamped(&self, name: &str, x: f64, y: f64, yaw: f64, stamp_s: f64) -> Result<()> {
+        let body = json!({"x": x, "y": y, "yaw": yaw, "vx": 0.3, "vy": 0.0, "wz": 0.0, "stamp": stamp_s});
+        self.session
+            .put(format!("shift/default/robots/{name}/odom"), serde_json::to_vec(&body)?)
+            .encoding(Encoding::APPLICATION_JSON)
+            .await
+            .map_err(|e| anyhow!("{e}"))
+    }
+
     /// Publishes a PointCloud2 (CDR) of map-frame points.
     pub async fn cloud(&self, name: &str, pts: &[[f32; 3]]) -> Result<()> {
+        self.cloud_in(name, "map", Time { sec: 2, nanosec: 0 }, pts).await
+    }
+
+    /// Publishes a PointCloud2 (CDR) of points in `frame` stamped `stamp` (a robot-frame cloud is placed by the
+    /// odometry at its stamp).
+    pub async fn cloud_in(&self, name: &str, frame: &str, stamp: Time, pts: &[[f32; 3]]) -> Result<()> {
         let header = Header {
-            stamp: Time { sec: 2, nanosec: 0 },
-            frame_id: "map".into(),
+            stamp,
+            frame_id: frame.into(),
         };
         self.session
             .put(

@@ -138,3 +138,21 @@ pub fn check_correction(
     }
     Ok(new)
 }
+
+/// The first straight stretch at least `min_m` long that starts at or after waypoint `from`: `(i, j)`.
+pub fn straight_from(w: &[WaypointDoc], from: usize, min_m: f64) -> Option<(usize, usize)> {
+    let mut i = from;
+    while i + 1 < w.len() {
+        let mut j = i + 1;
+        while j + 1 < w.len()
+            && (i + 1..=j).all(|k| seg_dist((w[k].x, w[k].y), (w[i].x, w[i].y), (w[j + 1].x, w[j + 1].y)) < 1e-6)
+        {
+            j += 1;
+        }
+        if (w[j].x - w[i].x).hypot(w[j].y - w[i].y) >= min_m {
+            return Some((i, j));
+        }
+        i = j;
+    }
+    None
+}

@@ -191,6 +191,23 @@ async fn a_robot_follows_its_plan_and_a_correction_and_tail_prints_it() -> Resul
         statuses.iter().all(|s| s.robot.as_deref() == Some("r1")),
         "only r1's plans"
     );
+    // A robot that joins now asks for the status it missed: the plan's current one.
+    let asked = link
+        .fetch_status(&id, Duration::from_secs(2))
+        .await?
+        .context("the status queryable answers")?;
+    assert_eq!(
+        (asked.plan_id.as_str(), asked.robot.as_deref()),
+        (id.as_str(), Some("r1"))
+    );
+    assert_eq!(asked.version, followed.version().context("a version")?);
+    let mut joined = FollowedPlan::new(served.clone());
+    assert_eq!(
+        joined.on_status(&asked),
+        Applied::Watch {
+            health: asked.watch.context("watched")?
+        }
+    );
 
     // shiftctl printed the first correction, exactly.
     let mut stdout = tail.0.stdout.take().context("stdout")?;

@@ -64,6 +64,10 @@ struct Args {
     /// The shiftd binary (default: beside this example's folder, i.e. target/release/shiftd).
     #[arg(long)]
     shiftd: Option<PathBuf>,
+    /// `[watch]` keys for the daemon, as TOML lines (e.g. `changed_memory_s = 0` to compare one build with a
+    /// behaviour off).
+    #[arg(long)]
+    watch: Vec<String>,
 }
 
 fn warehouse() -> PathBuf {
@@ -156,11 +160,15 @@ struct Daemon {
 }
 
 impl Daemon {
-    async fn start(bin: &Path, dir: &Path) -> Result<Self> {
+    async fn start(bin: &Path, dir: &Path, watch: &[String]) -> Result<Self> {
         let (port, zport) = (free_port()?, free_port()?);
         let endpoint = format!("tcp/127.0.0.1:{zport}");
         let config = dir.join("shiftd.toml");
-        std::fs::write(&config, "[zenoh]\nsite = \"\"\n[demo]\nenabled = false\n")?;
+        let watch: String = watch.iter().map(|l| format!("{l}\n")).collect();
+        std::fs::write(
+            &config,
+            format!("[zenoh]\nsite = \"\"\n[demo]\nenabled = false\n[watch]\n{watch}"),
+        )?;
         let child = Command::new(bin)
             .args([
                 "serve",
@@ -298,7 +306,7 @@ struct RunFigures {
 
 async fn run_fleet(args: &Args, bin: &Path, n: usize) -> Result<RunFigures> {
     let dir = tempfile::tempdir()?;
-    let daemon = Daemon::start(bin, dir.path()).await?;
+    let daemon = Daemon::start(bin, dir.path(), &args.watch).await?;
     let client = Client::new(&daemon.base)?;
     let scene = warehouse();
     let yaml = std::fs::read_to_string(scene.join("map.yaml"))?;

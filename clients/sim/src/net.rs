@@ -98,8 +98,20 @@ impl RobotNet {
                         }
                         match link.fetch_plan(FETCH_TIMEOUT).await {
                             Ok(Some(doc)) => {
+                                let plan_id = doc.plan_id.clone();
                                 if inbox.send((index, RobotMessage::Plan(doc))).is_err() {
                                     break;
+                                }
+                                // Statuses are published on change: one that changed before this robot
+                                // listened (a hold on a blocked path) is asked for.
+                                match link.fetch_status(&plan_id, FETCH_TIMEOUT).await {
+                                    Ok(Some(status)) => {
+                                        if inbox.send((index, RobotMessage::Status(Box::new(status)))).is_err() {
+                                            break;
+                                        }
+                                    }
+                                    Ok(None) => {}
+                                    Err(e) => tracing::warn!("plan status fetch failed: {e}"),
                                 }
                             }
                             Ok(None) => {}

@@ -213,12 +213,7 @@ pub fn live_overlay(live: &LiveMaps, site: &str) -> Vec<[f64; 2]> {
     let Ok(map) = site_live.map.read() else {
         return Vec::new();
     };
-    let points: Vec<[f64; 2]> = map
-        .tree()
-        .flatten()
-        .iter()
-        .map(|p| [f64::from(p.x), f64::from(p.y)])
-        .collect();
+    let points: Vec<[f64; 2]> = map.points().all().iter().map(|p| [p.x, p.y]).collect();
     drop(map);
     tracing::debug!(site, points = points.len(), "live overlay for a plan job");
     metrics::histogram!("shift_plan_overlay_points").record(points.len() as f64);

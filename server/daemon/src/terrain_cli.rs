@@ -8,13 +8,12 @@ use std::time::Instant;
 
 use shift_engine::terrain_plan::{TerrainPlanned, TerrainRequest, plan_terrain};
 use shift_planner::geom::Point2;
-use shift_planner::map::GridGeometry;
-use shift_planner::speed::{AttributeMap, SpeedLimits};
-use shift_planner::terrain::GroundLimits;
+use shift_planner::speed::SpeedLimits;
+use shift_planner::terrain::{GroundLimits, VerticalLimits};
 use shift_proto::{AttributeDoc, RobotKindDoc};
 
 use crate::cloud::source::source_doc;
-use crate::cloud::{Cloud, GroundFilter, LengthUnit, LoadOptions, load_cloud_file};
+use crate::cloud::{GroundFilter, LengthUnit, LoadOptions, load_cloud_file};
 use crate::err;
 use crate::error::Result;
 use crate::render_terrain::{render_curvature, render_elevation, render_terrain_plan};
@@ -73,6 +72,12 @@ pub struct TerrainArgs {
     /// Roughest ground a ground robot drives (RMS over 3 × 3 cells), metres.
     #[arg(long, default_value_t = 0.05)]
     pub max_roughness_m: f64,
+    /// Fastest climb of a drone, m/s (an autopilot's WPNAV_SPEED_UP); unlimited when absent.
+    #[arg(long)]
+    pub max_climb_mps: Option<f64>,
+    /// Fastest descent of a drone, m/s (an autopilot's WPNAV_SPEED_DN); unlimited when absent.
+    #[arg(long)]
+    pub max_descent_mps: Option<f64>,
     /// Write elevation.png, gaussian-curvature.png and mean-curvature.png into this folder.
     #[arg(long)]
     pub render_maps: Option<PathBuf>,
@@ -127,7 +132,7 @@ pub fn run(t: &TerrainArgs, c: &TerrainCommon) -> Result<()> {
         .map_or_else(|| file.display().to_string(), |n| n.to_string_lossy().into_owned());
     let source = source_doc(&cloud, &name);
     let attribute = match &c.attribute {
-        Some(path) => Some(attribute_blobs(path, &cloud, t.grid_m)?),
+        Some(path) => Some(attribute_blobs(path)?),
         None => None,
     };
     let req = TerrainRequest {
@@ -147,6 +152,10 @@ pub fn run(t: &TerrainArgs, c: &TerrainCommon) -> Result<()> {
             max_roughness_m: t.max_roughness_m,
         },
         limits: c.limits,
+        vertical: VerticalLimits {
+            climb_mps: t.max_climb_mps,
+            descent_mps: t.max_descent_mps,
+        },
         attribute,
         seed: c.seed,
     };
@@ -163,20 +172,10 @@ pub fn run(t: &TerrainArgs, c: &TerrainCommon) -> Result<()> {
     Ok(())
 }
 
-/// An attribute given as Gaussian blobs (map frame, metres) over the cloud's extent at the grid cell.
-fn attribute_blobs(path: &Path, cloud: &Cloud, grid_m: f64) -> Result<AttributeMap> {
+/// An attribute given as Gaussian blobs (map frame, metres); the engine rasterises it on the surface's grid.
+fn attribute_blobs(path: &Path) -> Result<AttributeDoc> {
     let text = std::fs::read_to_string(path).map_err(|e| err!("reading {}: {e}", path.display()))?;
-    let doc: AttributeDoc =
-        serde_json::from_str(&text).map_err(|e| err!("{}: attribute blobs JSON: {e}", path.display()))?;
-    let [lo, hi] = cloud.bounds;
-    let cells = |a: f64, b: f64| ((b - a) / grid_m).ceil().max(1.0) as usize;
-    let g = GridGeometry::new(
-        cells(lo[0], hi[0]),
-        cells(lo[1], hi[1]),
-        grid_m,
-        Point2::new(lo[0], lo[1]),
-    )?;
-    Ok(shift_engine::attribute_map(&doc, g)?)
+    serde_json::from_str(&text).map_err(|e| err!("{}: attribute blobs JSON: {e}", path.display()))
 }
 
 fn render_all(p: &TerrainPlanned, t: &TerrainArgs, c: &TerrainCommon) -> Result<()> {
@@ -222,7 +221,7 @@ pub fn summary(p: &TerrainPlanned) -> String {
     );
     if let Some(d) = &t.drone {
         line += &format!(
-            "surface coverage {:.2} %  altitude error p50 {:.3} p95 {:.3} max {:.3} m  lane spacing p5 {:.3} p95 {:.3} m (tool {} m)  max path slope {:.1}°  lanes {}",
+            "surface coverage {:.2} %  altitude error p50 {:.3} p95 {:.3} max {:.3} m  lane spacing p5 {:.3} p95 {:.3} m (tool {} m)  max path slope {:.1}°  climb {:.2} / descent {:.2} m/s  lanes {}",
             d.surface_coverage_pct,
             d.altitude_error_m.p50,
             d.altitude_error_m.p95,
@@ -231,6 +230,8 @@ pub fn summary(p: &TerrainPlanned) -> String {
             d.lane_spacing_m.p95,
             d.tool_width_m,
             d.max_path_slope_deg,
+            d.max_climb_mps,
+            d.max_descent_mps,
             d.lanes
         );
     }

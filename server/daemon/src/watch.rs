@@ -34,7 +34,7 @@ impl CheckRunner {
             let site = live.get(&job.site);
             let result = std::panic::catch_unwind(AssertUnwindSafe(|| match &site {
                 Some(s) => match s.map.read() {
-                    Ok(map) => run_check(&job, Some(map.tree())),
+                    Ok(map) => run_check(&job, Some(map.points())),
                     Err(_) => CheckOutcome::Failed("live map lock poisoned".into()),
                 },
                 None => run_check(&job, None),

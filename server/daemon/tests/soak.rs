@@ -175,13 +175,7 @@ async fn a_working_fleet_leaves_memory_threads_files_and_store_flat() -> Result<
     }
     let mut pending: Vec<String> = Vec::new();
     let mut next_robot = 0usize;
-    let mut rng = 0x5eed_50a4_u64;
-    let mut unit = move || {
-        rng ^= rng << 13;
-        rng ^= rng >> 7;
-        rng ^= rng << 17;
-        (rng >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut unit = common::uniform(0x5eed_50a4);
     let started = Instant::now();
     let (mut next_plan, mut next_sample) = (started, started);
     let mut stamp = 10_000_000_000i64;

@@ -7,6 +7,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, RwLock};
 
 use shift_planner::map::DistanceField;
+use shift_planner::terrain::TerrainSurface;
 use shift_proto::SiteSummary;
 
 use crate::live_map::{LiveMap, LiveMapParams};
@@ -53,8 +54,24 @@ impl SiteLive {
 #[derive(Debug, Default)]
 pub struct LiveMaps {
     sites: RwLock<HashMap<String, Arc<SiteLive>>>,
-    /// Each site's static clearance field, so live maps skip points the static map explains.
-    statics: RwLock<HashMap<String, Arc<DistanceField>>>,
+    /// Each site's static map as live maps use it.
+    statics: RwLock<HashMap<String, SiteStatic>>,
+}
+
+/// What a live map takes from its site's static map.
+#[derive(Debug, Clone)]
+struct SiteStatic {
+    /// Distance to the static map's obstacles: points it explains are not new.
+    clearance: Arc<DistanceField>,
+    /// A terrain site's ground: the obstacle height band is measured over it.
+    ground: Option<Arc<TerrainSurface>>,
+}
+
+impl SiteStatic {
+    fn apply(&self, map: &mut LiveMap) {
+        map.set_static(Some(self.clearance.clone()));
+        map.set_ground(self.ground.clone());
+    }
 }
 
 impl LiveMaps {
@@ -63,15 +80,17 @@ impl LiveMaps {
         self.sites.read().ok()?.get(site).cloned()
     }
 
-    /// Sets a site's static map (at upload and restore); its live map, if any, uses it from now on.
-    pub fn set_static(&self, site: &str, clearance: Arc<DistanceField>) {
-        if let Ok(mut statics) = self.statics.write() {
-            statics.insert(site.to_owned(), clearance.clone());
-        }
+    /// Sets a site's static map (at upload and restore): its clearance field and, on a terrain site, its ground.
+    /// Its live map, if any, uses them from now on.
+    pub fn set_static(&self, site: &str, clearance: Arc<DistanceField>, ground: Option<Arc<TerrainSurface>>) {
+        let stat = SiteStatic { clearance, ground };
         if let Some(live) = self.get(site)
             && let Ok(mut map) = live.map.write()
         {
-            map.set_static(Some(clearance));
+            stat.apply(&mut map);
+        }
+        if let Ok(mut statics) = self.statics.write() {
+            statics.insert(site.to_owned(), stat);
         }
     }
 
@@ -84,7 +103,9 @@ impl LiveMaps {
         let x1 = x0 + summary.width as f64 * summary.resolution;
         let y1 = y0 + summary.height as f64 * summary.resolution;
         let mut map = LiveMap::new(params, x0, y0, x1, y1).ok()?;
-        map.set_static(self.statics.read().ok()?.get(&summary.site).cloned());
+        if let Some(stat) = self.statics.read().ok()?.get(&summary.site) {
+            stat.apply(&mut map);
+        }
         let live = Arc::new(SiteLive {
             map: RwLock::new(map),
             recent_ms: Mutex::new(VecDeque::new()),
@@ -107,7 +128,7 @@ impl LiveMaps {
         let statics = self
             .statics
             .read()
-            .map_or(0, |f| f.values().map(|d| d.memory_bytes()).sum());
+            .map_or(0, |f| f.values().map(|d| d.clearance.memory_bytes()).sum());
         (live, statics)
     }
 

@@ -8,17 +8,18 @@
 //!   coverage pipeline plans on it; each waypoint's z is the ground height under it.
 
 use shift_planner::geom::Point2;
+use shift_planner::map::GridGeometry;
 use shift_planner::metrics::count_turns;
 use shift_planner::pipeline::{NoMonitor, PlanParams, plan_shaped};
 use shift_planner::space::{CoverageSpace, RobotShape};
 use shift_planner::speed::{AttributeMap, SpeedLimits, SpeedParams};
 use shift_planner::terrain::{
     CurvatureMap, DroneParams, DroneProfile, GroundLimits, LaneChoice, Quantiles, SurfaceReport, TerrainParams,
-    TerrainSurface, Traversability, ground_occupancy, plan_drone, profile_drone,
+    TerrainSurface, Traversability, VerticalLimits, ground_occupancy, plan_drone, profile_drone, vertical_speeds,
 };
 use shift_proto::{
-    CloudSourceDoc, DroneMetricsDoc, GroundDoc, PlanDocument, PlanMetricsDoc, QuantilesDoc, RegionDoc, RobotKindDoc,
-    SurfaceDoc, TerrainDoc, TerrainPlanDocument, WaypointDoc, WaypointKindDoc,
+    AttributeDoc, CloudSourceDoc, DroneMetricsDoc, GroundDoc, PlanDocument, PlanMetricsDoc, QuantilesDoc, RegionDoc,
+    RobotKindDoc, SurfaceDoc, TerrainDoc, TerrainPlanDocument, WaypointDoc, WaypointKindDoc,
 };
 
 use crate::error::EngineError;
@@ -47,8 +48,11 @@ pub struct TerrainRequest {
     pub ground: GroundLimits,
     /// Speed limits (drones: along the 3-D path).
     pub limits: SpeedLimits,
-    /// Attribute (dirtiness, dryness) on the map frame; lanes are slower where it is high.
-    pub attribute: Option<AttributeMap>,
+    /// Drones: climb and descent limits.
+    pub vertical: VerticalLimits,
+    /// Attribute (dirtiness, dryness) as blobs in the map frame; lanes are slower where it is high. It is
+    /// rasterised on the surface's own grid, whose origin and size the cloud decides.
+    pub attribute: Option<AttributeDoc>,
     /// Seed of the ground pipeline's random choices.
     pub seed: u64,
 }
@@ -75,9 +79,37 @@ pub fn plan_terrain(
 ) -> Result<TerrainPlanned, EngineError> {
     let mut terrain = TerrainParams::default();
     terrain.grid.cell_m = req.grid_m;
+    let job = Job {
+        plan_id,
+        points,
+        source,
+        req,
+        terrain,
+    };
     match req.kind {
-        RobotKindDoc::Drone => plan_flight(plan_id, points, source, req, &terrain),
-        RobotKindDoc::Ground => plan_ground(plan_id, points, source, req, &terrain),
+        RobotKindDoc::Drone => plan_flight(job),
+        RobotKindDoc::Ground => plan_ground(job),
+    }
+}
+
+/// One terrain plan's inputs, as both robot kinds take them.
+struct Job<'a> {
+    plan_id: &'a str,
+    points: &'a [[f64; 3]],
+    source: CloudSourceDoc,
+    req: &'a TerrainRequest,
+    terrain: TerrainParams,
+}
+
+impl Job<'_> {
+    /// The request's attribute rasterised on `geometry` (the surface's grid).
+    fn attribute(&self, geometry: GridGeometry) -> Result<Option<AttributeMap>, EngineError> {
+        self.req
+            .attribute
+            .as_ref()
+            .map(|doc| crate::attribute_map(doc, geometry))
+            .transpose()
+            .map_err(|e| EngineError::InvalidRequest(format!("attribute: {e}")))
     }
 }
 
@@ -112,13 +144,8 @@ fn domain_polygon(s: &TerrainSurface) -> Vec<[f64; 2]> {
     vec![[lo[0], lo[1]], [hi[0], lo[1]], [hi[0], hi[1]], [lo[0], hi[1]]]
 }
 
-fn plan_flight(
-    plan_id: &str,
-    points: &[[f64; 3]],
-    source: CloudSourceDoc,
-    req: &TerrainRequest,
-    terrain: &TerrainParams,
-) -> Result<TerrainPlanned, EngineError> {
+fn plan_flight(job: Job<'_>) -> Result<TerrainPlanned, EngineError> {
+    let req = job.req;
     let drone = DroneParams {
         tool_width_m: req.tool_width_m,
         altitude_offset_m: req.altitude_offset_m,
@@ -126,8 +153,10 @@ fn plan_flight(
         lanes: LaneChoice::Auto,
         region_fill_m: req.region_fill_m,
     };
-    let out = plan_drone(points, terrain, &drone)?;
-    let profile: DroneProfile = profile_drone(&out.plan, req.attribute.as_ref(), &req.limits)?;
+    let out = plan_drone(job.points, &job.terrain, &drone)?;
+    let attribute = job.attribute(out.surface.geometry)?;
+    let profile: DroneProfile = profile_drone(&out.plan, attribute.as_ref(), &req.limits, &req.vertical)?;
+    let (max_climb_mps, max_descent_mps) = vertical_speeds(&out.plan.path, &profile.time_s);
     let m = &out.metrics;
     let waypoints: Vec<WaypointDoc> = out
         .plan
@@ -154,7 +183,7 @@ fn plan_flight(
     let turns = count_turns(&flat) as u64;
     let coverage_pct = 100.0 * m.surface_coverage;
     let plan = PlanDocument {
-        plan_id: plan_id.to_owned(),
+        plan_id: job.plan_id.to_owned(),
         version: 1,
         frame: "map".into(),
         waypoints,
@@ -183,7 +212,7 @@ fn plan_flight(
         plan,
         terrain: TerrainDoc {
             robot_kind: RobotKindDoc::Drone,
-            source,
+            source: job.source,
             grid_m: req.grid_m,
             altitude_offset_m: Some(req.altitude_offset_m),
             surface: surface_doc(&out.surface, &out.report),
@@ -195,6 +224,8 @@ fn plan_flight(
                 lane_spacing_m: quantiles(&m.lane_spacing_m),
                 tool_width_m: req.tool_width_m,
                 lanes: m.lanes as u64,
+                max_climb_mps,
+                max_descent_mps,
             }),
             ground: None,
         },
@@ -207,19 +238,10 @@ fn plan_flight(
     })
 }
 
-fn plan_ground(
-    plan_id: &str,
-    points: &[[f64; 3]],
-    source: CloudSourceDoc,
-    req: &TerrainRequest,
-    terrain: &TerrainParams,
-) -> Result<TerrainPlanned, EngineError> {
-    let out = ground_occupancy(
-        points,
-        terrain,
-        &req.ground,
-        f64::from(crate::terrain_site::MAX_FILL_CELLS) * req.grid_m,
-    )?;
+fn plan_ground(job: Job<'_>) -> Result<TerrainPlanned, EngineError> {
+    let req = job.req;
+    // Interpolated ground counts as drivable as far as the cloud's own sampling gaps reach, no farther.
+    let out = ground_occupancy(job.points, &job.terrain, &req.ground, None)?;
     let g = out.occupancy.geometry;
     let robot = RobotShape {
         radius_m: req.robot_radius_m.unwrap_or(req.tool_width_m / 2.0),
@@ -239,17 +261,9 @@ fn plan_ground(
         ..PlanParams::default()
     };
     let speed = SpeedParams::new(req.limits, req.tool_width_m);
-    let attribute = match &req.attribute {
-        Some(a) if a.geometry() == &g => Some(a.clone()),
-        Some(_) => {
-            return Err(EngineError::InvalidRequest(
-                "attribute: its grid must match the terrain grid (give it as blobs)".into(),
-            ));
-        }
-        None => None,
-    };
+    let attribute = job.attribute(g)?;
     let (plan, profile) = plan_shaped(&space, &params, attribute.as_ref(), &speed, &mut NoMonitor)?;
-    let mut doc = to_document(plan_id, (&space, &plan), &profile, attribute.is_some(), 0.0);
+    let mut doc = to_document(job.plan_id, (&space, &plan), &profile, attribute.is_some(), 0.0);
     let mut max_slope = 0.0f64;
     let trav: &Traversability = &out.traversability;
     crate::terrain_site::set_ground_height(&out.surface, &mut doc.waypoints);
@@ -264,7 +278,7 @@ fn plan_ground(
         plan: doc,
         terrain: TerrainDoc {
             robot_kind: RobotKindDoc::Ground,
-            source,
+            source: job.source,
             grid_m: req.grid_m,
             altitude_offset_m: None,
             surface: surface_doc(&out.surface, &out.report),

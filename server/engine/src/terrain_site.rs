@@ -3,7 +3,8 @@
 //! The daemon reads the cloud and the planner extracts its surface (seed 000 §IV.A); the site keeps that
 //! smoothed elevation map (heights as f32, sub-millimetre at any real elevation) and the robot limits, not the
 //! cloud: a restart rebuilds the same occupancy from it without the file. Slope, step and roughness over the
-//! limits are obstacles; ground interpolated farther than [`MAX_FILL_CELLS`] cells from any point is unknown.
+//! limits are obstacles; ground interpolated farther from any point than the cloud's own sampling gaps reach
+//! ([`shift_planner::terrain::interior_fill_rings`], decided at upload and kept) is unknown.
 //! Every plan and correction on the site gets each waypoint's z from the elevation map (ground height, map
 //! frame, metres).
 
@@ -16,8 +17,10 @@ use shift_proto::{CloudSourceDoc, WaypointDoc};
 
 use crate::error::{EngineError, Result};
 
-/// Interpolated ground farther than this many cells from any point is unknown.
-pub const MAX_FILL_CELLS: u32 = 4;
+/// Records written before the fill reach was measured per cloud used this one.
+fn legacy_fill_rings() -> u32 {
+    4
+}
 
 /// What the store keeps of a terrain site.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -44,11 +47,16 @@ pub struct TerrainSite {
     pub max_step_m: f64,
     /// Roughest patch (RMS over 3 × 3 cells), metres.
     pub max_roughness_m: f64,
+    /// Interpolated ground farther than this many fill rings from data is unknown (the reach of the cloud's own
+    /// sampling gaps at upload).
+    #[serde(default = "legacy_fill_rings")]
+    pub fill_rings: u32,
 }
 
 impl TerrainSite {
-    /// The record of `surface` read from `source` under `limits`.
-    pub fn new(surface: &TerrainSurface, source: CloudSourceDoc, limits: &GroundLimits) -> Self {
+    /// The record of `surface` read from `source` under `limits`; interpolated ground counts as drivable up to
+    /// `fill_rings` rings from data.
+    pub fn new(surface: &TerrainSurface, source: CloudSourceDoc, limits: &GroundLimits, fill_rings: u32) -> Self {
         let g = surface.geometry;
         Self {
             source,
@@ -61,6 +69,7 @@ impl TerrainSite {
             max_slope_deg: limits.max_slope_rad.to_degrees(),
             max_step_m: limits.max_step_m,
             max_roughness_m: limits.max_roughness_m,
+            fill_rings,
         }
     }
 
@@ -107,10 +116,11 @@ impl TerrainSite {
         let surface = self.surface()?;
         let limits = self.limits();
         let trav = Traversability::new(&surface, &limits)?;
-        let grid = trav.occupancy(&surface, &limits, f64::from(MAX_FILL_CELLS) * self.resolution)?;
+        let grid = trav.occupancy(&surface, &limits, f64::from(self.fill_rings) * self.resolution)?;
         let s = &self.source;
         let remark = format!(
-            "terrain from {} ({}, {} of {} points; {}): obstacles over {:.1}° slope, {} m step, {} m roughness",
+            "terrain from {} ({}, {} of {} points; {}): obstacles over {:.1}° slope, {} m step, {} m roughness; \
+             ground interpolated more than {:.2} m from points is unknown",
             s.name,
             s.format,
             s.points_used,
@@ -118,7 +128,8 @@ impl TerrainSite {
             s.conversion,
             self.max_slope_deg,
             self.max_step_m,
-            self.max_roughness_m
+            self.max_roughness_m,
+            f64::from(self.fill_rings) * self.resolution
         );
         Ok((grid, surface, remark))
     }
@@ -159,7 +170,7 @@ mod tests {
         // 20 m × 10 m: flat for x < 10 m, then a 45° ramp.
         let g = GridGeometry::new(40, 20, 0.5, Point2::new(100.0, 200.0)).expect("geometry");
         let surface = TerrainSurface::from_fn(g, |x, _| 5.0 + (x - 110.0).max(0.0)).expect("surface");
-        let rec = TerrainSite::new(&surface, source(), &GroundLimits::default());
+        let rec = TerrainSite::new(&surface, source(), &GroundLimits::default(), 4);
         let text = serde_json::to_string(&rec).expect("ser");
         let back: TerrainSite = serde_json::from_str(&text).expect("de");
         assert_eq!(back, rec);
@@ -191,11 +202,11 @@ mod tests {
     fn a_damaged_record_is_refused_naming_what_is_wrong() {
         let g = GridGeometry::new(4, 4, 1.0, Point2::origin()).expect("geometry");
         let surface = TerrainSurface::from_fn(g, |_, _| 1.0).expect("surface");
-        let mut rec = TerrainSite::new(&surface, source(), &GroundLimits::default());
+        let mut rec = TerrainSite::new(&surface, source(), &GroundLimits::default(), 4);
         rec.heights_f32le.truncate(10);
         let e = rec.parse().expect_err("short heights");
         assert!(e.to_string().contains("height bytes"), "{e}");
-        let mut rec = TerrainSite::new(&surface, source(), &GroundLimits::default());
+        let mut rec = TerrainSite::new(&surface, source(), &GroundLimits::default(), 4);
         rec.heights_f32le[0..4].copy_from_slice(&f32::NAN.to_le_bytes());
         assert!(rec.parse().expect_err("NaN").to_string().contains("not finite"));
     }

@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 use shift_planner::correct::{self, CorrectParams, RepairKind, TimedWaypoint, World};
 use shift_planner::footprint::Footprint;
 use shift_planner::geom::Point2;
-use shift_planner::map::ikd_tree::IkdTree;
+use shift_planner::map::LivePoints;
 use shift_planner::speed::SpeedLimits;
 use shift_proto::{CorrectionReason, PlanDocument, RobotSpec, WaypointDoc};
 
@@ -40,6 +40,10 @@ pub struct WatchParams {
     /// A person standing in an aisle walks on; a wall stays. Meanwhile the robot's own safety layer holds it,
     /// and each check of its path (at its odometry, at most every `check_interval_ms`) looks again. 0 = at once.
     pub end_hold_s: f64,
+    /// A place where the live map changed checks the robots whose window comes to it for this long, seconds
+    /// (the live map's `horizon_s` by default: its points are gone after that too). 0 turns it off: such
+    /// obstacles are then met at the pose cadence alone.
+    pub changed_memory_s: f64,
 }
 
 impl Default for WatchParams {
@@ -52,6 +56,7 @@ impl Default for WatchParams {
             max_curvature_per_m: 0.0,
             check_interval_ms: 200,
             end_hold_s: 10.0,
+            changed_memory_s: 600.0,
         }
     }
 }
@@ -113,6 +118,9 @@ pub enum Trigger {
     MapChange,
     /// The robot moved (periodic re-check).
     Pose,
+    /// The robot's window took in a place where the live map changed within `changed_memory_s` (an obstacle
+    /// known before the robot came near it; see [`crate::hot_cells`]).
+    Approach,
 }
 
 /// The speed limits a correction is re-profiled with (the plan request's robot).
@@ -183,8 +191,8 @@ pub enum CheckOutcome {
 }
 
 /// Runs a check: judge the window, repair the first breach, re-profile its speeds. Pure and deterministic
-/// for the same inputs; `live` is the site's obstacle tree (points projected to z = 0), if it has one.
-pub fn run_check(job: &CheckJob, live: Option<&IkdTree>) -> CheckOutcome {
+/// for the same inputs; `live` is the site's live obstacle points, if it has any.
+pub fn run_check(job: &CheckJob, live: Option<LivePoints<'_>>) -> CheckOutcome {
     let w = &job.doc.waypoints;
     if w.len() < 2 {
         return CheckOutcome::Clear;
@@ -256,7 +264,7 @@ pub fn run_check(job: &CheckJob, live: Option<&IkdTree>) -> CheckOutcome {
 
 #[cfg(test)]
 mod tests {
-    use shift_planner::map::ikd_tree::{IkdParams, Point3};
+    use shift_planner::map::ikd_tree::{IkdParams, IkdTree, Point3};
     use shift_proto::{PlanMetricsDoc, WaypointKindDoc};
 
     use super::*;
@@ -286,7 +294,7 @@ mod tests {
         // A post on the lane past the door still breaks it.
         let live = post(5.5, 2.0);
         assert!(
-            !matches!(run_check(&j, Some(&live)), CheckOutcome::Clear),
+            !matches!(run_check(&j, Some(at_origin(&live))), CheckOutcome::Clear),
             "a new obstacle on the lane"
         );
     }
@@ -381,6 +389,11 @@ mod tests {
         }
     }
 
+    /// A tree of map-frame points (its origin at the map frame's).
+    fn at_origin(tree: &IkdTree) -> LivePoints<'_> {
+        LivePoints::new(tree, shift_planner::geom::Point2::origin())
+    }
+
     fn post(cx: f64, cy: f64) -> IkdTree {
         let mut pts = Vec::new();
         for i in 0..5 {
@@ -403,7 +416,7 @@ mod tests {
         let j = job(doc.clone(), 1.3);
         assert_eq!(run_check(&j, None), CheckOutcome::Clear);
         let tree = post(3.3, 2.0);
-        let CheckOutcome::Correct(p) = run_check(&j, Some(&tree)) else {
+        let CheckOutcome::Correct(p) = run_check(&j, Some(at_origin(&tree))) else {
             panic!("a post 2 m ahead on the lane must be corrected");
         };
         assert_eq!(p.reason, CorrectionReason::Obstacle);
@@ -435,6 +448,6 @@ mod tests {
         assert!(p.dt_after_s > 0.0, "the detour takes longer");
         // A post behind the robot is none of its business.
         let behind = post(0.6, 2.0);
-        assert_eq!(run_check(&job(doc, 2.5), Some(&behind)), CheckOutcome::Clear);
+        assert_eq!(run_check(&job(doc, 2.5), Some(at_origin(&behind))), CheckOutcome::Clear);
     }
 }

@@ -18,7 +18,7 @@ use shift_planner::correct::hooks::{self, Minimum, Objective};
 use shift_planner::correct::{CorrectParams, judge, optimise, repair};
 use shift_planner::geom::Point2;
 use shift_planner::map::ikd_tree::Point3;
-use shift_planner::map::{CellState, DistanceField, GridGeometry, IkdParams, IkdTree, OccupancyGrid};
+use shift_planner::map::{CellState, DistanceField, GridGeometry, IkdParams, IkdTree, LivePoints, OccupancyGrid};
 use std::cell::RefCell;
 use std::time::{Duration, Instant};
 
@@ -187,7 +187,7 @@ fn bench(c: &mut Criterion) {
         }
         let mut tree = IkdTree::new(IkdParams::default()).expect("params");
         tree.build(&pts);
-        let world = World::new(&grid, &field, Some(&tree)).expect("world");
+        let world = World::new(&grid, &field, Some(LivePoints::new(&tree, Point2::origin()))).expect("world");
         let breaches = judge(&path, 0, robot, &world, &p);
         let Some(b) = breaches.first().copied() else {
             println!("cluster {n}: no breach judged");

@@ -21,8 +21,8 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use shift_planner::speed::SpeedLimits;
 use shift_planner::terrain::{
-    DroneParams, ElevationGrid, GroundLimits, TerrainMesh, TerrainParams, TerrainSurface, drone_metrics,
-    ground_occupancy, plan_lanes, profile_drone,
+    DroneParams, ElevationGrid, GroundLimits, TerrainMesh, TerrainParams, TerrainSurface, VerticalLimits,
+    drone_metrics, ground_occupancy, plan_lanes, profile_drone,
 };
 
 fn ground(x: f64, y: f64) -> f64 {
@@ -80,14 +80,20 @@ fn main() {
         ..DroneParams::default()
     };
     let plan = plan_lanes(&surface, &drone).expect("lanes");
-    let profile = profile_drone(&plan, None, &SpeedLimits::new(0.5, 8.0, 2.0)).expect("speeds");
+    let profile = profile_drone(
+        &plan,
+        None,
+        &SpeedLimits::new(0.5, 8.0, 2.0),
+        &VerticalLimits::default(),
+    )
+    .expect("speeds");
     let drone_ms = ms(t);
     let t = Instant::now();
     let mesh = TerrainMesh::new(&surface).expect("mesh");
     let m = drone_metrics(&surface, &mesh, &plan);
     let metrics_ms = ms(t);
     let t = Instant::now();
-    let ground_out = ground_occupancy(&points, &params, &GroundLimits::default(), 4.0 * grid_m).expect("ground");
+    let ground_out = ground_occupancy(&points, &params, &GroundLimits::default(), None).expect("ground");
     let ground_ms = ms(t);
     let blocked = (0..ground_out.occupancy.geometry.len())
         .filter(|&i| !ground_out.occupancy.is_free(i))

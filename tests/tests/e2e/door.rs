@@ -59,6 +59,8 @@ async fn a_declared_length_over_the_limit_is_413_before_any_body_byte() -> Resul
     for (path, content_type, key) in [
         ("/v1/sites/big/map", "application/json", "max_body_bytes"),
         ("/v1/sites/big/map", "multipart/form-data; boundary=x", "max_body_bytes"),
+        ("/v1/sites/big/field", "application/geo+json", "max_body_bytes"),
+        ("/v1/sites/big/terrain", "application/octet-stream", "max_body_bytes"),
         ("/v1/plans", "application/json", "max_request_bytes"),
         ("/v1/plans/p-1/assign", "application/json", "max_request_bytes"),
     ] {

@@ -12,9 +12,9 @@ use shift_proto::ros::laser_scan::encode_laser_scan;
 use shift_proto::ros::odometry::encode_odometry;
 use shift_proto::ros::point_cloud2::encode_point_cloud2_xyz;
 use shift_proto::ros::{LaserScan, Time};
-use shift_proto::{CorrectionDoc, CorrectionReason, PlanDocument, PlanStatusResponse, WaypointDoc};
+use shift_proto::{CorrectionDoc, CorrectionReason, PlanDocument, PlanStatusResponse};
 use shift_tests::fleet::{LONG, free_port, header_ns, odom_at, poll, robot_session, room_grid};
-use shift_tests::path::{along, check_correction, clearance, index_at, length, post, seg_dist};
+use shift_tests::path::{along, check_correction, clearance, index_at, length, post, seg_dist, straight_from};
 use shift_tests::{TestServer, test_config};
 use zenoh::bytes::Encoding;
 
@@ -163,24 +163,6 @@ async fn plan_on(server: &TestServer, site: &str, robot: &str) -> Result<(String
     }
     let (_, served) = server.get(&format!("/v1/plans/{id}/path")).await?;
     Ok((id, serde_json::from_value(served)?))
-}
-
-/// The first straight stretch at least `min_m` long that starts at or after waypoint `from`: `(i, j)`.
-fn straight_from(w: &[WaypointDoc], from: usize, min_m: f64) -> Option<(usize, usize)> {
-    let mut i = from;
-    while i + 1 < w.len() {
-        let mut j = i + 1;
-        while j + 1 < w.len()
-            && (i + 1..=j).all(|k| seg_dist((w[k].x, w[k].y), (w[i].x, w[i].y), (w[j + 1].x, w[j + 1].y)) < 1e-6)
-        {
-            j += 1;
-        }
-        if (w[j].x - w[i].x).hypot(w[j].y - w[i].y) >= min_m {
-            return Some((i, j));
-        }
-        i = j;
-    }
-    None
 }
 
 /// Points of the site's live map.

@@ -63,7 +63,7 @@ async fn site_points(server: &TestServer) -> Result<(u64, u64)> {
 }
 
 /// A robot on `mapping` drives from (2.025, 2.025) to (3.025, 2.025) between t = 100 s and 101 s, sends one
-/// map-frame cloud (32 voxels) and one scan stamped 100.5 s (4 returns → 4 voxels at z = 0).
+/// map-frame cloud (16 ground-plane voxels) and one scan stamped 100.5 s (4 returns → 4 voxels).
 async fn ros2_robot_feeds_the_live_map(mapping: Ros2Mapping, attach: bool) -> Result<()> {
     let _ = tracing_subscriber::fmt()
         .with_env_filter(tracing_subscriber::EnvFilter::new("warn,shiftd=info"))
@@ -135,7 +135,8 @@ async fn ros2_robot_feeds_the_live_map(mapping: Ros2Mapping, attach: bool) -> Re
         "{robots}"
     );
 
-    // A map-frame cloud: 10 × 10 × 2 points on a 2 cm lattice = 4 × 4 × 2 voxels; a floor point is filtered.
+    // A map-frame cloud: 10 × 10 × 2 points on a 2 cm lattice = 4 × 4 ground-plane voxels (the two layers are one
+    // obstacle); a floor point is filtered.
     let mut pts = obstacle_box(5.0, 5.0, 10, 2);
     pts.push([5.0, 5.0, 0.0]);
     robot
@@ -146,8 +147,8 @@ async fn ros2_robot_feeds_the_live_map(mapping: Ros2Mapping, attach: bool) -> Re
         )
         .await?;
     poll(
-        async || Ok((site_points(&server).await?.0 == 32).then_some(())),
-        "32 cloud voxels",
+        async || Ok((site_points(&server).await?.0 == 16).then_some(())),
+        "16 cloud voxels",
     )
     .await?;
 
@@ -167,7 +168,7 @@ async fn ros2_robot_feeds_the_live_map(mapping: Ros2Mapping, attach: bool) -> Re
         .put(Stream::Scan, encode_laser_scan(&scan(100_500_000_000)), false)
         .await?;
     poll(
-        async || Ok((site_points(&server).await?.0 == 36).then_some(())),
+        async || Ok((site_points(&server).await?.0 == 20).then_some(())),
         "4 more voxels from the scan",
     )
     .await?;
@@ -191,7 +192,7 @@ async fn ros2_robot_feeds_the_live_map(mapping: Ros2Mapping, attach: bool) -> Re
     .await?;
     assert_eq!(
         site_points(&server).await?.0,
-        36,
+        20,
         "nothing of the dropped scans reached the map"
     );
     let metrics = server.http.get(server.url("/metrics")).send().await?.text().await?;

@@ -49,7 +49,7 @@ async fn recorded_session(record_dir: &Path, data_dir: &Path) -> Result<Vec<[f32
         .encoding(Encoding::APPLICATION_CDR)
         .await
         .map_err(zerr)?;
-    // A 0.4 m box at (4, 4), three layers (8 × 8 × 3 voxels), plus a floor point that is filtered.
+    // A 0.4 m box at (4, 4), three layers (8 × 8 ground-plane voxels), plus a floor point that is filtered.
     let mut pts = obstacle_box(4.0, 4.0, 20, 3);
     pts.push([4.0, 4.0, 0.0]);
     robot
@@ -229,7 +229,7 @@ async fn a_recorded_fleet_session_replays_to_the_same_decisions_and_reads_in_pyt
     poll(
         async || {
             let (_, s) = second.get("/v1/sites/demo").await?;
-            Ok((s["points_in_tree"] == 8 * 8 * 3).then_some(()))
+            Ok((s["points_in_tree"] == 8 * 8).then_some(()))
         },
         "the replayed cloud in the second daemon",
     )

@@ -1,12 +1,19 @@
 //! Terrain sites from outside (issue 23): a backend uploads a LiDAR tile (LAZ, in feet) as a ground robot's site,
 //! plans on it and gets waypoints with the ground's z; broken clouds and bad parameters are refused naming what
-//! is wrong, the site keeps its map, and a restart brings the same site back from the store.
+//! is wrong, the site keeps its map, and a restart brings the same site back from the store. A robot that joins
+//! late on a georeferenced terrain site (UTM coordinates, ground 60 m above the datum) and sees a post with its
+//! own sensor gets a correction that clears the post and carries the ground's height.
 
 use std::path::Path;
 use std::time::Duration;
 
-use anyhow::{Context, Result, ensure};
+use anyhow::{Context, Result, anyhow, ensure};
 use serde_json::{Value, json};
+use shift_proto::ros::Time;
+use shift_proto::{CorrectionReason, PlanDocument};
+use shift_tests::bench::Rng;
+use shift_tests::fleet::{ScriptedRobot, fleet_config};
+use shift_tests::path::{index_at, length, seg_dist, straight_from};
 use shift_tests::{TestServer, test_config};
 
 const LONG: Duration = Duration::from_secs(180);
@@ -136,5 +143,129 @@ async fn a_lidar_tile_becomes_a_ground_site_whose_plans_carry_the_ground_height(
         again["free_cells"] == before["free_cells"] && again["warnings"] == before["warnings"],
         "{again}"
     );
+    server.stop().await
+}
+
+/// A binary PLY of a 16 m × 10 m tile in UTM metres: ground 60 m above the datum, rising 5 cm per metre east
+/// and 2 cm per metre north, with ±5 mm of noise. Returns the file and the ground's height function.
+fn utm_tile(ox: f64, oy: f64) -> (Vec<u8>, impl Fn(f64, f64) -> f64) {
+    let ground = move |x: f64, y: f64| 60.0 + 0.05 * (x - ox) + 0.02 * (y - oy);
+    let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+    let mut unit = move || rng.next_f64();
+    let n = 40_000;
+    let mut ply = format!(
+        "ply\nformat binary_little_endian 1.0\nelement vertex {n}\nproperty double x\nproperty double y\n\
+         property double z\nend_header\n"
+    )
+    .into_bytes();
+    for _ in 0..n {
+        let (x, y) = (ox + 16.0 * unit(), oy + 10.0 * unit());
+        let z = ground(x, y) + 0.01 * (unit() - 0.5);
+        for v in [x, y, z] {
+            ply.extend_from_slice(&v.to_le_bytes());
+        }
+    }
+    (ply, ground)
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_robot_joining_late_on_a_utm_terrain_site_is_corrected_round_a_post_at_the_grounds_height() -> Result<()> {
+    const RADIUS: f64 = 0.15;
+    let dir = tempfile::tempdir()?;
+    let (config, endpoint) = fleet_config(dir.path())?;
+    let server = TestServer::start(config).await?;
+    let (ox, oy) = (512_300.0, 5_123_400.0);
+    let (ply, ground) = utm_tile(ox, oy);
+    let (code, site) = upload(&server, "slope", "?grid_m=0.1", ply).await?;
+    ensure!(code == 201, "{code} {site}");
+    let robot = ScriptedRobot::join(&endpoint, "r1").await?;
+    let req = json!({"site": "slope", "start": [ox + 0.5, oy + 0.5], "robot": {"radius": RADIUS, "tool_width": 0.3}});
+    let (code, acc) = server.post("/v1/plans", &req).await?;
+    ensure!(code == 202, "{code} {acc}");
+    let id = acc["plan_id"].as_str().context("plan id")?.to_owned();
+    let status = server.wait_plan(&id, LONG, |s| s == "ready" || s == "failed").await?;
+    ensure!(status["status"] == "ready", "{status}");
+    let (code, st) = server
+        .post(&format!("/v1/plans/{id}/assign"), &json!({"robot": "r1"}))
+        .await?;
+    ensure!(code == 200, "assign: {code} {st}");
+    let (_, served) = server.get(&format!("/v1/plans/{id}/path")).await?;
+    let doc: PlanDocument = serde_json::from_value(served)?;
+    let w = &doc.waypoints;
+    for p in w {
+        ensure!(
+            (p.z - ground(p.x, p.y)).abs() < 0.02,
+            "plan z {} over ground {}",
+            p.z,
+            ground(p.x, p.y)
+        );
+    }
+
+    // First seen at 60 % of its plan, on a straight stretch; odometry at 20 Hz on its own clock.
+    let seg = straight_from(w, index_at(w, 0.6 * length(w)), 2.5).context("a straight stretch after 60 %")?;
+    let (a, b) = (&w[seg.0], &w[seg.1]);
+    let yaw = (b.y - a.y).atan2(b.x - a.x);
+    let (c, s) = (yaw.cos(), yaw.sin());
+    let mut stamp = 100.0;
+    for _ in 0..3 {
+        robot.odom_stamped("r1", a.x, a.y, yaw, stamp).await?;
+        stamp += 0.05;
+        tokio::time::sleep(Duration::from_millis(30)).await;
+    }
+    let stamp = stamp - 0.05;
+    // Its depth camera sees a 0.2 m post 1.5 m ahead, 0.1–0.5 m over the ground: a cloud in its own frame.
+    let mut local = Vec::new();
+    for i in 0..5 {
+        for j in 0..5 {
+            for k in 0..3 {
+                local.push([1.4 + 0.05 * i as f32, -0.1 + 0.05 * j as f32, 0.1 + 0.2 * k as f32]);
+            }
+        }
+    }
+    let post: Vec<(f64, f64)> = local
+        .iter()
+        .map(|p| {
+            let (u, v) = (f64::from(p[0]), f64::from(p[1]));
+            (a.x + c * u - s * v, a.y + s * u + c * v)
+        })
+        .collect();
+    let secs = stamp.floor();
+    let time = Time {
+        sec: secs as i32,
+        nanosec: ((stamp - secs) * 1e9).round() as u32,
+    };
+    robot.cloud_in("r1", "base_link", time, &local).await?;
+
+    let corr = robot.next_correction(LONG).await?;
+    ensure!(corr.base_version == 1 && corr.plan_id == id, "{corr:?}");
+    ensure!(
+        corr.reason != CorrectionReason::Skipped,
+        "room to pass on an open slope: {corr:?}"
+    );
+    ensure!(corr.from >= seg.0, "the patch is ahead of the robot: {corr:?}");
+    let new = corr.apply(&doc).map_err(|e| anyhow!("{e}"))?;
+    // The patch and its joins clear the post by the radius, measured in f64 (f32 would be 0.5 m coarse here).
+    let lo = corr.from.saturating_sub(1);
+    let hi = (corr.from + corr.waypoints.len() + 1).min(new.waypoints.len() - 1);
+    let nw = &new.waypoints;
+    let clear = (lo..hi)
+        .flat_map(|i| {
+            post.iter()
+                .map(move |&p| seg_dist(p, (nw[i].x, nw[i].y), (nw[i + 1].x, nw[i + 1].y)))
+        })
+        .fold(f64::INFINITY, f64::min);
+    ensure!(clear >= RADIUS - 0.03, "the patch comes {clear:.3} m from the post");
+    // Every waypoint of the patch is on the ground: z is the slope's height under it, not 0.
+    for p in &corr.waypoints {
+        let g = ground(p.x, p.y);
+        ensure!(
+            (p.z - g).abs() < 0.02,
+            "correction z {} over ground {g} at ({}, {})",
+            p.z,
+            p.x,
+            p.y
+        );
+    }
+    robot.session.close().await.map_err(|e| anyhow!("{e}"))?;
     server.stop().await
 }

@@ -209,6 +209,34 @@ impl RobotLink {
         Ok(newest)
     }
 
+    /// A plan's current status from the daemon's status queryable (`None` when nobody answered within
+    /// `timeout`). Statuses are published when they change; a robot that joins (or rejoins) asks, so it learns
+    /// a watch health such as `blocked` that changed before it was listening.
+    ///
+    /// ```no_run
+    /// # async fn run(link: shift_client::robot::RobotLink) -> shift_client::Result<()> {
+    /// if let Some(status) = link.fetch_status("p-1", std::time::Duration::from_secs(2)).await? {
+    ///     println!("{} is {:?}, watch {:?}", status.plan_id, status.status, status.watch);
+    /// }
+    /// # Ok(()) }
+    /// ```
+    pub async fn fetch_status(&self, plan_id: &str, timeout: Duration) -> Result<Option<PlanStatusResponse>> {
+        let key = self
+            .keys
+            .plan_status(plan_id)
+            .map_err(|e| ClientError::InvalidInput(e.to_string()))?;
+        let replies = self.session.get(key).timeout(timeout).await.map_err(zerr)?;
+        let mut newest: Option<PlanStatusResponse> = None;
+        while let Ok(reply) = replies.recv_async().await {
+            let Ok(sample) = reply.result() else { continue };
+            let status: PlanStatusResponse = decode(sample, "a plan status")?;
+            if newest.as_ref().is_none_or(|n| status.version >= n.version) {
+                newest = Some(status);
+            }
+        }
+        Ok(newest)
+    }
+
     /// Feeds `message` to `followed`; on a version gap fetches the plan ([`RobotLink::fetch_plan`] with
     /// [`RobotLink::fetch_timeout`]) and feeds that too. Answers what finally happened (still a gap when
     /// the fetch found nothing newer).

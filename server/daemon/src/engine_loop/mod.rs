@@ -256,9 +256,14 @@ impl EngineLoop {
                     self.plans_changed = true;
                     p.views.forget_plan(&plan_id);
                 }
-                Command::SiteStatic { site, clearance, grid } => {
+                Command::SiteStatic {
+                    site,
+                    clearance,
+                    grid,
+                    ground,
+                } => {
                     p.views.set_site_map(&site, grid);
-                    p.live.set_static(&site, clearance);
+                    p.live.set_static(&site, clearance, ground);
                 }
                 Command::StartCheck(job) => self.checks.start(*job),
                 Command::StoreCorrection {

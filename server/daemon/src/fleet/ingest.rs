@@ -385,7 +385,7 @@ impl Ingest {
                 if let Some(sweep) = &p.sweep {
                     map.clear_through(sweep);
                 }
-                let r = map.ingest(&p.points, p.planar, now);
+                let r = map.ingest(&p.points, p.heights, now);
                 // Forget what was not seen again within the horizon, at most every few seconds.
                 if now.saturating_sub(live.last_expire_ms.load(Ordering::Relaxed)) >= EXPIRE_EVERY_MS {
                     live.last_expire_ms.store(now, Ordering::Relaxed);

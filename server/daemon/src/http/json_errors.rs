@@ -3,7 +3,7 @@
 //! `{"error": {code, message}}` too, naming what was refused. Headers (`Allow`, `Retry-After`, …) are kept.
 
 use axum::extract::{Request, State};
-use axum::http::{Method, StatusCode, header};
+use axum::http::{StatusCode, header};
 use axum::middleware::Next;
 use axum::response::{IntoResponse, Response};
 
@@ -19,20 +19,53 @@ pub struct BodyLimits {
 }
 
 impl BodyLimits {
-    /// Whether `path` is a site upload route (map, field, terrain: the ones with the large limit).
-    pub fn is_map_upload(method: &Method, path: &str) -> bool {
-        method == Method::POST
-            && path.starts_with("/v1/sites/")
-            && ["/map", "/field", "/terrain"].iter().any(|end| path.ends_with(end))
+    /// The site uploads' limit (map, field, terrain).
+    pub fn map(&self) -> BodyLimit {
+        BodyLimit {
+            bytes: self.map_bytes,
+            key: "max_body_bytes",
+        }
     }
 
-    fn message(&self, method: &Method, path: &str) -> String {
-        let (limit, key) = if Self::is_map_upload(method, path) {
-            (self.map_bytes, "max_body_bytes")
-        } else {
-            (self.request_bytes, "max_request_bytes")
-        };
-        format!("body: the request body is larger than this route accepts ({limit} bytes, [http] {key})")
+    /// The other routes' limit.
+    pub fn request(&self) -> BodyLimit {
+        BodyLimit {
+            bytes: self.request_bytes,
+            key: "max_request_bytes",
+        }
+    }
+}
+
+/// One route's body limit and the configuration key that sets it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct BodyLimit {
+    /// Most bytes.
+    pub bytes: usize,
+    /// The `[http]` key that sets it.
+    pub key: &'static str,
+}
+
+impl BodyLimit {
+    /// The API's 413 for this limit.
+    fn too_large(&self) -> ApiError {
+        ApiError::new(
+            StatusCode::PAYLOAD_TOO_LARGE,
+            "payload_too_large",
+            format!(
+                "body: the request body is larger than this route accepts ({} bytes, [http] {})",
+                self.bytes, self.key
+            ),
+        )
+    }
+
+    /// A route's own 413 (tower-http's, plain text) as the API's error naming this limit; other responses
+    /// pass. Layered on each limited route, so the message comes from the route table itself.
+    pub async fn name_in_413(self, res: Response) -> Response {
+        if res.status() != StatusCode::PAYLOAD_TOO_LARGE || is_json(&res) {
+            return res;
+        }
+        let (parts, _) = res.into_parts();
+        with_headers(self.too_large(), parts)
     }
 }
 
@@ -52,7 +85,8 @@ pub async fn json_errors(State(limits): State<BodyLimits>, req: Request, next: N
         return res;
     }
     let error = match status {
-        StatusCode::PAYLOAD_TOO_LARGE => ApiError::new(status, "payload_too_large", limits.message(&method, &path)),
+        // A route without its own limit has the router's default, the site uploads' one.
+        StatusCode::PAYLOAD_TOO_LARGE => limits.map().too_large(),
         StatusCode::REQUEST_TIMEOUT => ApiError::new(
             status,
             "request_timeout",

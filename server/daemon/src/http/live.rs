@@ -59,13 +59,7 @@ pub async fn get_live(
         .get(&site)
         .and_then(|live| {
             let map = live.map.read().ok()?;
-            Some(
-                map.tree()
-                    .flatten()
-                    .iter()
-                    .map(|p| [f64::from(p.x), f64::from(p.y)])
-                    .collect(),
-            )
+            Some(map.points().all().iter().map(|p| [p.x, p.y]).collect())
         })
         .unwrap_or_default();
     let points = thin(&all, max);
@@ -82,7 +76,7 @@ pub fn live_count(state: &AppState, site: &str) -> usize {
     state
         .live
         .get(site)
-        .and_then(|live| live.map.read().ok().map(|m| m.tree().len()))
+        .and_then(|live| live.map.read().ok().map(|m| m.len()))
         .unwrap_or(0)
 }
 

@@ -41,7 +41,7 @@ use tower_http::limit::RequestBodyLimitLayer;
 use tower_http::timeout::TimeoutLayer;
 use tower_http::trace::TraceLayer;
 
-pub use json_errors::BodyLimits;
+pub use json_errors::{BodyLimit, BodyLimits};
 pub use openapi::ApiDoc;
 
 use shift_engine::LiveMaps;
@@ -84,13 +84,17 @@ pub struct AppState {
     pub retry_after_s: u64,
 }
 
-/// A route whose body may hold at most `bytes`: tower-http's limit (a `Content-Length` over it is refused
+/// A route whose body may hold at most `limit.bytes`: tower-http's limit (a `Content-Length` over it is refused
 /// before the body is read; a chunked body is cut at it), and axum's own extractor limit off, so the
-/// extractors see tower-http's `LengthLimitError` directly (multipart maps it to 413 only then).
-fn limited(route: MethodRouter<AppState>, bytes: usize) -> MethodRouter<AppState> {
+/// extractors see tower-http's `LengthLimitError` directly (multipart maps it to 413 only then). Its 413 names
+/// the limit and the key that sets it.
+fn limited(route: MethodRouter<AppState>, limit: BodyLimit) -> MethodRouter<AppState> {
     route
-        .layer::<_, std::convert::Infallible>(RequestBodyLimitLayer::new(bytes))
+        .layer::<_, std::convert::Infallible>(RequestBodyLimitLayer::new(limit.bytes))
         .layer::<_, std::convert::Infallible>(DefaultBodyLimit::disable())
+        .layer::<_, std::convert::Infallible>(axum::middleware::map_response(move |res: axum::response::Response| {
+            limit.name_in_413(res)
+        }))
 }
 
 /// The whole API.
@@ -99,20 +103,20 @@ pub fn router(state: AppState) -> Router {
         .route("/v1/sites", get(listings::list_sites))
         .route(
             "/v1/sites/{site}/map",
-            limited(post(sites::upload_map), state.body_limits.map_bytes).get(listings::get_site_map),
+            limited(post(sites::upload_map), state.body_limits.map()).get(listings::get_site_map),
         )
         .route("/v1/sites/{site}", get(sites::get_site))
         .route(
             "/v1/sites/{site}/field",
-            limited(post(field::upload_field), state.body_limits.map_bytes),
+            limited(post(field::upload_field), state.body_limits.map()),
         )
         .route(
             "/v1/sites/{site}/terrain",
-            limited(post(terrain::upload_terrain), state.body_limits.map_bytes),
+            limited(post(terrain::upload_terrain), state.body_limits.map()),
         )
         .route(
             "/v1/plans",
-            limited(post(plans::create_plan), state.body_limits.request_bytes).get(listings::list_plans),
+            limited(post(plans::create_plan), state.body_limits.request()).get(listings::list_plans),
         )
         .route("/v1/plans/{id}", get(plans::get_plan).delete(plans::cancel_plan))
         .route("/v1/plans/{id}/path", get(plans::get_path))
@@ -121,12 +125,12 @@ pub fn router(state: AppState) -> Router {
         .route("/v1/sites/{site}/live", get(live::get_live))
         .route(
             "/v1/plans/{id}/assign",
-            limited(post(robots::assign_plan), state.body_limits.request_bytes),
+            limited(post(robots::assign_plan), state.body_limits.request()),
         )
         .route("/v1/sites/{site}/coverage", get(missions::get_site_coverage))
         .route(
             "/v1/missions",
-            limited(post(missions::create_mission), state.body_limits.request_bytes),
+            limited(post(missions::create_mission), state.body_limits.request()),
         )
         .route(
             "/v1/missions/{id}",
@@ -136,7 +140,7 @@ pub fn router(state: AppState) -> Router {
         .route("/v1/missions/{id}/replan", post(missions::replan_mission))
         .route(
             "/v1/missions/{id}/robots",
-            limited(post(missions::join_mission), state.body_limits.request_bytes),
+            limited(post(missions::join_mission), state.body_limits.request()),
         )
         .route("/v1/robots", get(robots::list_robots))
         .route("/v1/robots/{id}", get(robots::get_robot))

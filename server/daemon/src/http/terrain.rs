@@ -117,14 +117,20 @@ fn terrain_record(bytes: &[u8], q: &TerrainUploadQuery, opts: &LoadOptions) -> R
     }
     let mut params = TerrainParams::default();
     params.grid.cell_m = grid_m;
-    let (surface, _) = extract_surface(&cloud.points, &params).map_err(|e| ApiError::bad_request(e.to_string()))?;
+    let (surface, report) =
+        extract_surface(&cloud.points, &params).map_err(|e| ApiError::bad_request(e.to_string()))?;
     let d = GroundLimits::default();
     let limits = GroundLimits {
         max_slope_rad: q.max_slope_deg.map_or(d.max_slope_rad, f64::to_radians),
         max_step_m: q.max_step_m.unwrap_or(d.max_step_m),
         max_roughness_m: q.max_roughness_m.unwrap_or(d.max_roughness_m),
     };
-    Ok(TerrainSite::new(&surface, source_doc(&cloud, "upload"), &limits))
+    Ok(TerrainSite::new(
+        &surface,
+        source_doc(&cloud, "upload"),
+        &limits,
+        report.interior_fill_rings,
+    ))
 }
 
 /// Upload a point cloud (the file as the body: LAS, LAZ, PLY or PCD) as a ground robot's site. Units come from

@@ -529,13 +529,10 @@ impl WriterThread {
                 .live
                 .get(&site)
                 .and_then(|l| {
-                    l.map.read().ok().map(|m| {
-                        m.tree()
-                            .flatten()
-                            .iter()
-                            .map(|p| (f64::from(p.x), f64::from(p.y)))
-                            .collect()
-                    })
+                    l.map
+                        .read()
+                        .ok()
+                        .map(|m| m.points().all().iter().map(|p| (p.x, p.y)).collect())
                 })
                 .unwrap_or_default();
             let stamp = now_ns();

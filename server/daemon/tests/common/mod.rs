@@ -285,3 +285,14 @@ pub fn pillar_grid(side: usize, seed: usize) -> Value {
     }
     serde_json::json!({"resolution": 0.05, "origin": [0.0, 0.0], "width": side, "height": side, "cells": cells})
 }
+
+/// A seeded xorshift generator of uniform draws in [0, 1), for test scenes and traffic.
+pub fn uniform(seed: u64) -> impl FnMut() -> f64 {
+    let mut s = seed.max(1);
+    move || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 11) as f64 / (1u64 << 53) as f64
+    }
+}

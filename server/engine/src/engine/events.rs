@@ -252,6 +252,8 @@ pub enum Command {
         clearance: Arc<shift_planner::map::DistanceField>,
         /// The thresholded map itself (what `GET /v1/sites/{site}/map` answers).
         grid: Arc<shift_planner::map::OccupancyGrid>,
+        /// A terrain site's ground: the live map measures the obstacle height band over it.
+        ground: Option<Arc<shift_planner::terrain::TerrainSurface>>,
     },
     /// Persist a plan record (a status change) and update the read model.
     StorePlan(PlanRecord),

@@ -166,6 +166,7 @@ impl Engine {
                 site: site.record.site.clone(),
                 clearance: site.map.clearance.clone(),
                 grid: site.map.grid.clone(),
+                ground: site.map.elevation.clone(),
             });
             self.sites.insert(site.record.site.clone(), Arc::new(site));
         }

@@ -9,6 +9,18 @@ use shift_proto::ros::{LaserScan, scan_points};
 
 use crate::robots::Pose2;
 
+/// What the z of placed points measures, which decides how the live map's obstacle height band applies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Heights {
+    /// A 2-D scan (z = 0): obstacles at any height, no band.
+    Planar,
+    /// A cloud given in the map frame: z is the map frame's (on a terrain site, absolute: the band is measured
+    /// over the ground under each point).
+    MapFrame,
+    /// A cloud given in the robot frame: z is the height over the ground the robot stands on.
+    OverGround,
+}
+
 /// Where the laser sits in the robot frame.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct SensorOffset {

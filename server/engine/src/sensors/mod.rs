@@ -24,7 +24,7 @@ use shift_proto::ros::LaserScan;
 use shift_proto::ros::laser_scan::decode_laser_scan;
 use shift_proto::ros::point_cloud2::{CloudXyz, decode_cloud_xyz};
 
-use self::geometry::{SensorOffset, robot_to_map, scan_to_map};
+use self::geometry::{Heights, SensorOffset, robot_to_map, scan_to_map};
 use self::sweep::Sweep;
 use crate::pose_history::{PoseHistory, PoseHistoryParams, PoseLookupError};
 use crate::robots::Pose2;
@@ -125,8 +125,8 @@ pub struct Placed {
     pub stream: Stream,
     /// Map-frame points `[x, y, z]`, metres.
     pub points: Vec<[f64; 3]>,
-    /// A scan: planar obstacles (no height band).
-    pub planar: bool,
+    /// What the points' z measures (a scan's are planar: no height band).
+    pub heights: Heights,
     /// A scan: the free space its rays crossed (the live map forgets what they saw through).
     pub sweep: Option<Sweep>,
     /// The message's stamp, nanoseconds (robot clock; 0 = unstamped).
@@ -276,7 +276,7 @@ struct RobotSensors {
 
 /// Where a message stands after a placement attempt.
 enum Step {
-    Placed(Vec<[f64; 3]>, Option<Sweep>),
+    Placed(Vec<[f64; 3]>, Heights, Option<Sweep>),
     Wait(PoseLookupError, Decoded),
     Drop(DropReason, String),
 }
@@ -505,7 +505,7 @@ impl SensorHub {
             // (as tf2's message filter does); only then does the end pose within the tolerance stand in.
             let patient = now_ms < deadline_ms;
             match self.place(robot, msg, patient) {
-                Step::Placed(points, sweep) => {
+                Step::Placed(points, heights, sweep) => {
                     let r = self.robot(robot);
                     r.counts.placed += 1;
                     r.counts.points += points.len() as u64;
@@ -514,7 +514,7 @@ impl SensorHub {
                         robot: robot.to_owned(),
                         site: site.clone(),
                         stream,
-                        planar: stream == Stream::Scan,
+                        heights,
                         points,
                         sweep,
                         stamp_ns,
@@ -564,14 +564,14 @@ impl SensorHub {
             Decoded::Cloud(c) => {
                 let frame = c.header.frame_id.trim_start_matches('/');
                 if frame.is_empty() || frame == self.params.map_frame {
-                    return Step::Placed(c.points, None);
+                    return Step::Placed(c.points, Heights::MapFrame, None);
                 }
                 match lookup(c.header.stamp.to_ns()) {
-                    Ok(pose) => Step::Placed(robot_to_map(&c.points, pose), None),
+                    Ok(pose) => Step::Placed(robot_to_map(&c.points, pose), Heights::OverGround, None),
                     // Older than the history: the latest pose is closer than nothing (a cloud's points are
                     // obstacles for a while; a scan's are not worth a wrong place).
                     Err(PoseLookupError::TooOld { .. }) => match history.and_then(PoseHistory::latest) {
-                        Some(pose) => Step::Placed(robot_to_map(&c.points, pose), None),
+                        Some(pose) => Step::Placed(robot_to_map(&c.points, pose), Heights::OverGround, None),
                         None => Step::Wait(PoseLookupError::Empty, Decoded::Cloud(c)),
                     },
                     Err(e) => Step::Wait(e, Decoded::Cloud(c)),
@@ -580,6 +580,7 @@ impl SensorHub {
             Decoded::Scan(s) => match lookup(s.header.stamp.to_ns()) {
                 Ok(pose) => Step::Placed(
                     scan_to_map(&s, pose, self.params.scan_offset),
+                    Heights::Planar,
                     Sweep::of_scan(&s, pose, self.params.scan_offset),
                 ),
                 Err(e @ PoseLookupError::TooOld { .. }) => Step::Drop(DropReason::TooOld, format!("{robot}: {e}")),

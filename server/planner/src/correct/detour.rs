@@ -15,7 +15,6 @@ use std::cmp::Ordering;
 use std::collections::{BinaryHeap, VecDeque};
 
 use crate::geom::{Point2, simplify_polyline};
-use crate::map::ikd_tree::{Aabb, Point3};
 use crate::map::{DistanceField, GridGeometry};
 
 use super::verify::segment_clear;
@@ -82,14 +81,10 @@ impl LocalGrid {
                 site[ly * width + lx] = s;
             }
         }
-        if let Some(tree) = world.live {
+        if let Some(live) = world.live {
             let top = Point2::new(origin.x + width as f64 * c, origin.y + height as f64 * c);
-            let b = Aabb::new(
-                Point3::new(origin.x as f32, origin.y as f32, f32::NEG_INFINITY),
-                Point3::new(top.x as f32, top.y as f32, f32::INFINITY),
-            );
-            for q in tree.within_box(&b) {
-                if let Some(cell) = geo.locate(Point2::new(f64::from(q.x), f64::from(q.y))) {
+            for q in live.within(origin, top) {
+                if let Some(cell) = geo.locate(q) {
                     site[geo.index(cell)] = true;
                 }
             }

@@ -14,7 +14,6 @@
 //! slice. A row whose band lies at least the best distance away ends the scan in its direction.
 
 use crate::geom::Point2;
-use crate::map::ikd_tree::{Aabb, Point3};
 
 use super::cost::Obstacles;
 use super::world::World;
@@ -74,28 +73,10 @@ impl<'a, 'w> LocalObstacles<'a, 'w> {
         let nx = ((ex / bucket).ceil() as usize).max(1);
         let ny = ((ey / bucket).ceil() as usize).max(1);
         let mut raw: Vec<Point2> = Vec::new();
-        if ok && let Some(tree) = world.live {
-            // Grown a little so that the f32 box never cuts off a point of the f64 one; points outside the
-            // buckets' extent are at least `radius` from every query the buckets answer, and the clamping
-            // of `key` puts them in an edge bucket.
-            let grow = |v: f64| 1e-3 + 1e-6 * v.abs();
-            let b = Aabb::new(
-                Point3::new(
-                    (origin.x - grow(origin.x)) as f32,
-                    (origin.y - grow(origin.y)) as f32,
-                    f32::NEG_INFINITY,
-                ),
-                Point3::new(
-                    (top.x + grow(top.x)) as f32,
-                    (top.y + grow(top.y)) as f32,
-                    f32::INFINITY,
-                ),
-            );
-            raw = tree
-                .within_box(&b)
-                .into_iter()
-                .map(|q| Point2::new(f64::from(q.x), f64::from(q.y)))
-                .collect();
+        if ok && let Some(live) = world.live {
+            // Points outside the buckets' extent are at least `radius` from every query the buckets answer,
+            // and the clamping of `key` puts them in an edge bucket.
+            raw = live.within(origin, top);
         }
         let mut me = Self {
             world,
@@ -265,6 +246,7 @@ impl Obstacles for LocalObstacles<'_, '_> {
 mod tests {
     use super::*;
     use crate::correct::tests::{Site, blob, walled};
+    use crate::map::ikd_tree::{Aabb, Point3};
 
     /// The nearest live point of `p` by brute force over the tree's points, with its distance.
     fn brute(site: &Site, p: Point2) -> Option<f64> {

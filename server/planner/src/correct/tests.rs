@@ -3,7 +3,7 @@
 
 use crate::geom::{Point2, point_segment_distance};
 use crate::map::ikd_tree::Point3;
-use crate::map::{CellState, DistanceField, GridGeometry, IkdParams, IkdTree, OccupancyGrid};
+use crate::map::{CellState, DistanceField, GridGeometry, IkdParams, IkdTree, LivePoints, OccupancyGrid};
 
 use super::*;
 
@@ -35,7 +35,12 @@ impl Site {
     }
 
     pub(crate) fn world(&self) -> World<'_> {
-        World::new(&self.grid, &self.field, Some(&self.tree)).expect("consistent")
+        World::new(
+            &self.grid,
+            &self.field,
+            Some(LivePoints::new(&self.tree, Point2::origin())),
+        )
+        .expect("consistent")
     }
 
     /// Brute-force smallest distance from the polyline (continuous segments) to any obstacle (static cells

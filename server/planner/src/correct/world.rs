@@ -1,5 +1,5 @@
 //! The obstacles a correction must keep clear of: the site's static occupancy map (through its exact distance
-//! field) and, when present, the live ikd-tree of obstacle points (stored projected to z = 0).
+//! field) and, when present, the live obstacle points ([`LivePoints`]: ground plane, map-frame queries).
 //!
 //! Two kinds of query:
 //! - fast ones for the optimiser ([`World::nearest_obstacle`], [`World::clearance_fast`]): the static part is
@@ -12,8 +12,7 @@
 //!   band above the distance of interest are the cells around the point scanned.
 
 use crate::geom::Point2;
-use crate::map::ikd_tree::Point3;
-use crate::map::{DistanceField, IkdTree, OccupancyGrid};
+use crate::map::{DistanceField, LivePoints, OccupancyGrid};
 
 use super::error::CorrectError;
 
@@ -33,8 +32,8 @@ pub struct World<'a> {
     /// Exact distance field of `grid` to its non-free cells (same geometry), optionally with the map border
     /// as sites.
     pub field: &'a DistanceField,
-    /// Live obstacle points (z = 0), if the site has any.
-    pub live: Option<&'a IkdTree>,
+    /// Live obstacle points, if the site has any.
+    pub live: Option<LivePoints<'a>>,
 }
 
 impl<'a> World<'a> {
@@ -42,7 +41,7 @@ impl<'a> World<'a> {
     pub fn new(
         grid: &'a OccupancyGrid,
         field: &'a DistanceField,
-        live: Option<&'a IkdTree>,
+        live: Option<LivePoints<'a>>,
     ) -> Result<Self, CorrectError> {
         let w = Self { grid, field, live };
         w.check()?;
@@ -77,10 +76,7 @@ impl<'a> World<'a> {
     /// `None` without a live tree, with an empty one, or for a non-finite `p`.
     #[inline]
     pub fn nearest_live(&self, p: Point2) -> Option<(Point2, f64)> {
-        let tree = self.live?;
-        let (q, _) = tree.nearest_point(&Point3::new(p.x as f32, p.y as f32, 0.0))?;
-        let q = Point2::new(f64::from(q.x), f64::from(q.y));
-        Some((q, (q - p).norm()))
+        self.live?.nearest(p)
     }
 
     /// Distance from `p` to the nearest live obstacle point, metres (∞ when there is none).
@@ -205,7 +201,8 @@ impl<'a> World<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::map::{CellState, GridGeometry, IkdParams};
+    use crate::map::ikd_tree::Point3;
+    use crate::map::{CellState, GridGeometry, IkdParams, IkdTree};
 
     fn brute_static(grid: &OccupancyGrid, p: Point2) -> f64 {
         (0..grid.geometry.len())
@@ -249,7 +246,7 @@ mod tests {
         let field = DistanceField::compute(g, |i| !grid.is_free(i), false);
         let mut tree = IkdTree::new(IkdParams::default()).expect("params");
         tree.build(&[Point3::new(1.0, 1.0, 0.0)]);
-        let world = World::new(&grid, &field, Some(&tree)).expect("consistent");
+        let world = World::new(&grid, &field, Some(LivePoints::new(&tree, Point2::origin()))).expect("consistent");
         let p = Point2::new(1.3, 1.4);
         assert!((world.clearance_upto(p, 1.0) - 0.5).abs() < 1e-6);
         let (q, d) = world.nearest_obstacle(p).expect("an obstacle");

@@ -19,9 +19,10 @@ impl ObstacleDistance for DistanceField {
 }
 
 impl ObstacleDistance for IkdTree {
-    /// Distance to the nearest live obstacle point, measured in the ground plane: the site's obstacle tree
-    /// stores obstacle points projected to z = 0 (a 2-D scan is an obstacle whatever its height, and a 3-D
-    /// cloud's points inside the obstacle height band are flattened before insertion), so the query is at z = 0.
+    /// Distance to the nearest obstacle point from (x, y, 0), in 3-D. That is the ground-plane distance for
+    /// points at z = 0 (2-D scans, and this trait's tests); the live map keeps a cloud's points at their
+    /// map-frame heights, so the corrections measure those in the ground plane from a box query instead
+    /// (`correct::local`).
     fn obstacle_distance(&self, p: Point2) -> f64 {
         self.nearest_distance(&Point3::new(p.x as f32, p.y as f32, 0.0))
             .map_or(f64::INFINITY, f64::from)

@@ -134,12 +134,16 @@ pub fn drone_metrics(surface: &TerrainSurface, mesh: &TerrainMesh, plan: &DroneP
             // Lane arcs increase with k: the lanes whose swath holds this point are a run around the insertion
             // point.
             let k = lane_arcs.partition_point(|&v| v < arc);
-            let below = lane_arcs[..k].iter().rev().take_while(|&&v| arc - v <= half).count();
-            let above = lane_arcs[k..].iter().take_while(|&&v| v - arc <= half).count();
-            let swaths = below + above;
-            if swaths > 0 {
+            let within = |limit: f64| {
+                let below = lane_arcs[..k].iter().rev().take_while(|&&v| arc - v <= limit).count();
+                let above = lane_arcs[k..].iter().take_while(|&&v| v - arc <= limit).count();
+                below + above
+            };
+            // Covered by a swath's closed band; swept twice only inside two open bands (a point on the seam
+            // of two swaths that tile the surface is swept once).
+            if within(half) > 0 {
                 covered += area;
-                overlap += area * (swaths - 1) as f64;
+                overlap += area * within(half - 2e-9).saturating_sub(1) as f64;
             }
         }
     }

@@ -9,6 +9,10 @@
 //!   chords over their mean length): the 90° corners where a lane meets its turn and the vertical bends over a
 //!   ridge slow the drone alike, while the centimetre roughness of a LiDAR surface sampled every half metre
 //!   (which would read as sharp bends between neighbouring waypoints) does not.
+//! - Climbs and descents are capped apart ([`VerticalLimits`], as autopilots cap them: ArduPilot's
+//!   `WPNAV_SPEED_UP` and `WPNAV_SPEED_DN`): over a segment that rises by g metres per metre flown the speed is at
+//!   most climb / g (descent / |g| going down), at both its ends, so the vertical speed stays within the limit.
+//!   v_min wins where the two disagree (a grade steeper than limit / v_min), and the figure is reported.
 //! - The first and last points are at v_min, as on the ground.
 //! - Then the fastest profile under those caps and a_max ([`limit_acceleration`]), and its times.
 //!
@@ -22,6 +26,41 @@ use crate::geom::Point2;
 use crate::speed::samples::curvature_cap;
 use crate::speed::time_param::{limit_acceleration, times};
 use crate::speed::{AttributeMap, DwellLaw, SpeedLimits};
+
+/// A drone's vertical speed limits, m/s; `None` leaves that direction to the 3-D limits alone.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct VerticalLimits {
+    /// Fastest climb.
+    pub climb_mps: Option<f64>,
+    /// Fastest descent (a positive number).
+    pub descent_mps: Option<f64>,
+}
+
+impl VerticalLimits {
+    /// Refuses a limit that is not a positive finite number, naming it.
+    pub fn validate(&self) -> Result<()> {
+        for (name, v) in [("max_climb_mps", self.climb_mps), ("max_descent_mps", self.descent_mps)] {
+            if let Some(v) = v
+                && !(v.is_finite() && v > 0.0)
+            {
+                return Err(PlannerError::InvalidParam {
+                    name,
+                    reason: format!("{v} is not a positive speed"),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Fastest speed along a segment rising `grade` metres per metre flown (∞ when unlimited).
+    fn cap(&self, grade: f64) -> f64 {
+        let limit = if grade > 0.0 { self.climb_mps } else { self.descent_mps };
+        match limit {
+            Some(l) if grade.abs() > 1e-12 => l / grade.abs(),
+            _ => f64::INFINITY,
+        }
+    }
+}
 
 /// Speeds and times of a drone plan, one per point of [`DronePlan::path`].
 #[derive(Debug, Clone, PartialEq)]
@@ -64,10 +103,16 @@ fn turning_curvature(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
     cos.acos() / (0.5 * (lu + lv))
 }
 
-/// Profiles `plan` under `limits`, slowing its lanes where `attribute` (any grid in the map frame; A = 1
-/// everywhere when `None`) is high.
-pub fn profile_drone(plan: &DronePlan, attribute: Option<&AttributeMap>, limits: &SpeedLimits) -> Result<DroneProfile> {
+/// Profiles `plan` under `limits` and `vertical`, slowing its lanes where `attribute` (any grid in the map frame;
+/// A = 1 everywhere when `None`) is high.
+pub fn profile_drone(
+    plan: &DronePlan,
+    attribute: Option<&AttributeMap>,
+    limits: &SpeedLimits,
+    vertical: &VerticalLimits,
+) -> Result<DroneProfile> {
     limits.validate()?;
+    vertical.validate()?;
     let p = &plan.path;
     if p.len() != plan.on_lane.len() {
         return Err(PlannerError::InvalidParam {
@@ -87,6 +132,18 @@ pub fn profile_drone(plan: &DronePlan, attribute: Option<&AttributeMap>, limits:
             Some(*acc)
         }))
         .collect();
+    // Each segment's vertical cap, applied at both its ends.
+    let climb: Vec<f64> = p
+        .windows(2)
+        .zip(&seg)
+        .map(|(w, &s)| {
+            if s > 1e-12 {
+                vertical.cap((w[1][2] - w[0][2]) / s)
+            } else {
+                f64::INFINITY
+            }
+        })
+        .collect();
     let caps: Vec<f64> = (0..n)
         .map(|i| {
             if i == 0 || i + 1 == n {
@@ -102,12 +159,23 @@ pub fn profile_drone(plan: &DronePlan, attribute: Option<&AttributeMap>, limits:
                 let a = attribute.map_or(1.0, |m| m.at_point(Point2::new(p[i][0], p[i][1])));
                 cap = cap.min(law.speed(a));
             }
-            cap
+            cap.min(climb[i - 1]).min(climb[i]).max(limits.v_min_mps)
         })
         .collect();
     let speed_mps = limit_acceleration(&caps, &seg, limits.a_max_mps2);
     let time_s = times(&speed_mps, &seg);
     Ok(DroneProfile { speed_mps, time_s, law })
+}
+
+/// Fastest climb and fastest descent of a timed 3-D path, m/s (both ≥ 0): each segment's rise over its time.
+pub fn vertical_speeds(path: &[[f64; 3]], time_s: &[f64]) -> (f64, f64) {
+    path.windows(2)
+        .zip(time_s.windows(2))
+        .filter(|(_, t)| t[1] - t[0] > 1e-12)
+        .fold((0.0f64, 0.0f64), |(up, down), (w, t)| {
+            let vz = (w[1][2] - w[0][2]) / (t[1] - t[0]);
+            (up.max(vz), down.max(-vz))
+        })
 }
 
 #[cfg(test)]
@@ -135,7 +203,7 @@ mod tests {
     #[test]
     fn flat_lanes_fly_at_v_max_and_slow_into_the_corners() {
         let (plan, _) = plan_over(|_, _| 1.0);
-        let prof = profile_drone(&plan, None, &limits()).expect("profile");
+        let prof = profile_drone(&plan, None, &limits(), &VerticalLimits::default()).expect("profile");
         let v = &prof.speed_mps;
         assert_eq!(v.len(), plan.path.len());
         assert_eq!((v[0], *v.last().expect("last")), (0.5, 0.5));
@@ -166,7 +234,7 @@ mod tests {
             amplitude: 1.0,
         };
         let attr = AttributeMap::from_blobs(g, &[blob]).expect("attribute");
-        let prof = profile_drone(&plan, Some(&attr), &limits()).expect("profile");
+        let prof = profile_drone(&plan, Some(&attr), &limits(), &VerticalLimits::default()).expect("profile");
         // On the lanes: the higher the attribute, the slower (a lane point near the blob against one far away).
         let near = (0..plan.path.len())
             .filter(|&i| plan.on_lane[i])
@@ -188,10 +256,39 @@ mod tests {
     fn a_ridge_slows_the_drone_where_the_path_bends_over_it() {
         // A sharp ridge across the lanes at x = 10 m: 2 m high over 1 m.
         let (plan, _) = plan_over(|x, _| (2.0 - 4.0 * (x - 10.0).abs()).max(0.0));
-        let prof = profile_drone(&plan, None, &limits()).expect("profile");
+        let prof = profile_drone(&plan, None, &limits(), &VerticalLimits::default()).expect("profile");
         let crest = (0..plan.path.len())
             .find(|&i| plan.on_lane[i] && (plan.path[i][0] - 10.0).abs() < 0.2 && i > 2)
             .expect("the crest");
         assert!(prof.speed_mps[crest] < 4.0, "over the crest {}", prof.speed_mps[crest]);
+    }
+
+    #[test]
+    fn climbs_and_descents_keep_their_own_limits() {
+        // Rolling hills across the lanes: grades up to ±0.5 (a 1.5 m swell every 6π m).
+        let (plan, _) = plan_over(|x, _| 2.0 + 1.5 * (x / 3.0).sin());
+        let free = profile_drone(&plan, None, &limits(), &VerticalLimits::default()).expect("profile");
+        let (up, down) = vertical_speeds(&plan.path, &free.time_s);
+        assert!(
+            up > 1.0 && down > 1.0,
+            "unlimited, the hills are flown fast: {up} up, {down} down"
+        );
+        let vertical = VerticalLimits {
+            climb_mps: Some(1.0),
+            descent_mps: Some(0.6),
+        };
+        let held = profile_drone(&plan, None, &limits(), &vertical).expect("profile");
+        let (up, down) = vertical_speeds(&plan.path, &held.time_s);
+        assert!(up <= 1.0 + 1e-9 && down <= 0.6 + 1e-9, "{up} up, {down} down");
+        assert!(held.duration_s() > free.duration_s());
+        assert!(held.speed_mps.iter().all(|&v| v >= limits().v_min_mps - 1e-12));
+        for bad in [-1.0, 0.0, f64::NAN] {
+            let v = VerticalLimits {
+                climb_mps: Some(bad),
+                descent_mps: None,
+            };
+            let err = profile_drone(&plan, None, &limits(), &v).expect_err("refused");
+            assert!(err.to_string().contains("max_climb_mps"), "{err}");
+        }
     }
 }

@@ -224,3 +224,34 @@ fn an_irregular_tile_is_flown_only_where_it_has_data() {
         })
     ));
 }
+
+#[test]
+fn overlap_is_the_surface_swept_twice_where_lanes_are_closer_than_the_tool() {
+    // 30 m × 20 m: ten 2 m swaths tile it, nothing is swept twice.
+    let s = surface(121, 81, 0.25, |_, _| 2.0);
+    let (_, m) = measure(&s, &params(2.0, LaneChoice::Auto));
+    assert_eq!(m.overlap_area_m2, 0.0);
+    // 20 m × 10.5 m at 5 cm: 2 m swaths cannot tile 10.5 m, so neighbouring lanes close up. On a plane the area
+    // swept twice is, per pair of lanes, (tool − gap) × the length along the lanes, up to a row of cells at each
+    // edge of each band.
+    let g = 0.05;
+    let s = surface(401, 211, g, |_, _| 2.0);
+    let (plan, m) = measure(&s, &params(2.0, LaneChoice::Auto));
+    assert_eq!(plan.axis, LaneAxis::X);
+    let along = 401.0 * g;
+    let across: Vec<f64> = plan.lane_s.iter().map(|l| l[0]).collect();
+    let bands: Vec<f64> = across
+        .windows(2)
+        .map(|w| (2.0 - (w[1] - w[0])).max(0.0))
+        .filter(|&b| b > 0.0)
+        .collect();
+    assert!(!bands.is_empty(), "lanes closer than the tool: {across:?}");
+    let expected: f64 = bands.iter().sum::<f64>() * along;
+    let tolerance = bands.len() as f64 * 2.0 * g * along;
+    assert!(
+        (m.overlap_area_m2 - expected).abs() <= tolerance,
+        "overlap {:.2} m², expected {expected:.2} ± {tolerance:.2} (lanes at {across:?})",
+        m.overlap_area_m2
+    );
+    assert!(m.overlap_area_m2 > 0.0 && m.overlap_area_m2 < m.covered_area_m2);
+}

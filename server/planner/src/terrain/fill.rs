@@ -76,6 +76,59 @@ pub fn fill_gaps(heights: &mut [f64], geometry: &GridGeometry) -> Vec<u32> {
 }
 
 /// True when cell `i` has an 8-neighbour whose ring is `k`.
+/// How likely a cell inside the data may be a gap of the cloud's own sampling and still count as data (see
+/// [`interior_fill_rings`]).
+pub const INTERIOR_GAP_RISK: f64 = 1e-3;
+
+/// The fill ring the cloud's own sampling gaps reach inside its data: interpolated ground up to this ring is
+/// between points, beyond it is outside the cloud (an edge, a shadow, a pit the scanner never saw).
+///
+/// Points are taken as a Poisson process: the density λ (points per cell) is what the non-empty cells show
+/// (their mean count is λ / (1 − e^(−λ)), a zero-truncated Poisson), and a cell inside the data is measured
+/// with probability q = (1 − e^(−λ)) · (the share of non-empty cells that hold enough points to be measured).
+/// A cell is at ring > r when the (2r + 1)² cells around it are all gaps, probability (1 − q)^((2r+1)²); the
+/// answer is the smallest r ≥ 1 that makes it at most [`INTERIOR_GAP_RISK`]. So a dense cloud (λ = 2, q = 0.86)
+/// gets 1 ring and a sparse one (a LiDAR ground class at λ = 0.1) 4, with no constant tuned to either.
+/// `heights` says which cells were measured (finite), `counts` how many points fell in each.
+pub fn interior_fill_rings(counts: &[u32], heights: &[f64]) -> u32 {
+    const MAX_RINGS: u32 = 64;
+    let (mut nonempty, mut points, mut measured) = (0u64, 0u64, 0u64);
+    for (&c, h) in counts.iter().zip(heights) {
+        if c > 0 {
+            nonempty += 1;
+            points += u64::from(c);
+            measured += u64::from(h.is_finite());
+        }
+    }
+    if nonempty == 0 || measured == 0 {
+        return MAX_RINGS;
+    }
+    let mean = points as f64 / nonempty as f64;
+    // λ / (1 − e^(−λ)) rises from 1 (λ → 0) and stays under λ + 1: bisect on [0, mean].
+    let truncated = |l: f64| if l < 1e-12 { 1.0 } else { l / -(-l).exp_m1() };
+    let (mut lo, mut hi) = (0.0f64, mean);
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if truncated(mid) < mean {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let lambda = 0.5 * (lo + hi);
+    let q = -(-lambda).exp_m1() * measured as f64 / nonempty as f64;
+    if q >= 1.0 {
+        return 1;
+    }
+    // (1 − q)^((2r+1)²) ≤ risk ⇔ (2r + 1)² ≥ ln(risk) / ln(1 − q).
+    let need = INTERIOR_GAP_RISK.ln() / (-q).ln_1p();
+    if !need.is_finite() {
+        return MAX_RINGS;
+    }
+    let r = ((need.sqrt() - 1.0) / 2.0).ceil();
+    (r.max(1.0) as u32).min(MAX_RINGS)
+}
+
 fn next_to(geometry: &GridGeometry, ring: &[u32], i: usize, k: u32) -> bool {
     geometry
         .neighbors8(geometry.cell(i))
@@ -103,6 +156,57 @@ mod tests {
                 (heights[i] - z(c.x, c.y)).abs()
             })
             .fold(0.0, f64::max)
+    }
+
+    /// Uniform points over the left `share` of a 160 × 160 grid at `lambda` points per cell: counts and heights
+    /// (measured where a point fell).
+    fn sampled(lambda: f64, share: f64, seed: u64) -> (GridGeometry, Vec<u32>, Vec<f64>) {
+        use rand::{Rng, SeedableRng};
+        let g = GridGeometry::new(160, 160, 0.5, Point2::origin()).expect("geometry");
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let cols = (160.0 * share) as usize;
+        let n = (lambda * (cols * 160) as f64) as usize;
+        let mut counts = vec![0u32; g.len()];
+        for _ in 0..n {
+            let (x, y) = (rng.random_range(0..cols), rng.random_range(0..160usize));
+            counts[y * 160 + x] += 1;
+        }
+        let heights = counts.iter().map(|&c| if c > 0 { 1.0 } else { f64::NAN }).collect();
+        (g, counts, heights)
+    }
+
+    #[test]
+    fn the_interior_fill_reach_follows_the_density_and_holds_its_risk() {
+        for (lambda, want) in [(2.0, 1), (0.5, 2), (0.1, 4)] {
+            for share in [1.0, 0.4] {
+                let (g, counts, mut h) = sampled(lambda, share, 7);
+                let r = interior_fill_rings(&counts, &h);
+                // The data's own density decides, not how much of the grid it covers.
+                assert_eq!(r, want, "λ {lambda}, data over {share} of the grid");
+                // Oracle: interior cells (r + 1 cells clear of the data's edge) filled beyond ring r are rare.
+                let ring = fill_gaps(&mut h, &g);
+                let cols = (160.0 * share) as usize;
+                let m = r as usize + 1;
+                let interior: Vec<usize> = (m..160 - m)
+                    .flat_map(|y| (m..cols.saturating_sub(m)).map(move |x| y * 160 + x))
+                    .collect();
+                let beyond = interior.iter().filter(|&&i| ring[i] > r).count();
+                assert!(
+                    (beyond as f64) <= 3.0 * INTERIOR_GAP_RISK * interior.len() as f64 + 2.0,
+                    "λ {lambda}: {beyond} of {} interior cells beyond ring {r}",
+                    interior.len()
+                );
+            }
+        }
+        // No points: the reach is unbounded (capped); a cell with a count but too few to measure lowers q.
+        assert_eq!(interior_fill_rings(&[0, 0], &[f64::NAN, f64::NAN]), 64);
+        let (_, counts, h) = sampled(0.5, 1.0, 3);
+        let half: Vec<f64> = h
+            .iter()
+            .enumerate()
+            .map(|(i, &v)| if i % 2 == 0 { v } else { f64::NAN })
+            .collect();
+        assert!(interior_fill_rings(&counts, &half) > interior_fill_rings(&counts, &h));
     }
 
     #[test]

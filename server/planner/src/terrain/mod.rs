@@ -39,7 +39,8 @@ pub mod traverse;
 pub use curvature::{CurvatureMap, Derivatives, FundamentalForms};
 pub use drone::{DroneParams, DronePlan, LaneChoice, plan_lanes};
 pub use drone_metrics::{DroneMetrics, Quantiles, drone_metrics};
-pub use drone_speed::{DroneProfile, profile_drone};
+pub use drone_speed::{DroneProfile, VerticalLimits, profile_drone, vertical_speeds};
+pub use fill::interior_fill_rings;
 pub use grid::{ElevationGrid, GridParams};
 pub use mesh::TerrainMesh;
 pub use profile::LaneAxis;
@@ -107,16 +108,18 @@ pub struct GroundOutcome {
 }
 
 /// Cloud → smoothed surface → traversability → occupancy grid for the coverage pipeline. `max_fill_m`:
-/// interpolated ground farther than this from any data is unknown.
+/// interpolated ground farther than this from any data is unknown; `None` takes the reach of the cloud's own
+/// sampling gaps ([`SurfaceReport::interior_fill_rings`] cells).
 pub fn ground_occupancy(
     points: &[[f64; 3]],
     terrain: &TerrainParams,
     limits: &GroundLimits,
-    max_fill_m: f64,
+    max_fill_m: Option<f64>,
 ) -> Result<GroundOutcome> {
     limits.validate()?;
     let (surface, report) = extract_surface(points, terrain)?;
     let traversability = Traversability::new(&surface, limits)?;
+    let max_fill_m = max_fill_m.unwrap_or_else(|| f64::from(report.interior_fill_rings) * surface.geometry.resolution);
     let occupancy = traversability.occupancy(&surface, limits, max_fill_m)?;
     Ok(GroundOutcome {
         surface,

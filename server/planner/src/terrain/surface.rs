@@ -35,6 +35,8 @@ pub struct SurfaceReport {
     pub filled_cells: usize,
     /// Largest fill ring (distance to data, in cells).
     pub max_fill_ring: u32,
+    /// The fill ring the cloud's own sampling gaps reach inside its data ([`super::fill::interior_fill_rings`]).
+    pub interior_fill_rings: u32,
 }
 
 impl TerrainSurface {
@@ -44,6 +46,7 @@ impl TerrainSurface {
         check_grid("elevation grid", &grid.heights, &geometry)?;
         params.validate()?;
         let measured: Vec<bool> = grid.heights.iter().map(|h| h.is_finite()).collect();
+        let interior_fill_rings = super::fill::interior_fill_rings(&grid.counts, &grid.heights);
         let mut heights = grid.heights.clone();
         fill_gaps(&mut heights, &geometry);
         let smooth = smooth_outliers(&mut heights, &measured, &geometry, params)?;
@@ -57,6 +60,7 @@ impl TerrainSurface {
             smooth,
             filled_cells: measured.iter().filter(|&&m| !m).count(),
             max_fill_ring: fill_ring.iter().copied().max().unwrap_or(0),
+            interior_fill_rings,
         };
         Ok((
             Self {

@@ -100,7 +100,7 @@ fn a_ground_robot_plans_around_a_mound_too_steep_to_climb() {
     let mound = |x: f64, y: f64| 3.0 * (-((x - 15.0).powi(2) + (y - 15.0).powi(2)) / 8.0).exp();
     let pts = cloud(30.0, 30.0, 0.25, mound, |_, _| false, 0.0);
     let limits = GroundLimits::default();
-    let out = ground_occupancy(&pts, &TerrainParams::default(), &limits, 1.0).expect("occupancy");
+    let out = ground_occupancy(&pts, &TerrainParams::default(), &limits, Some(1.0)).expect("occupancy");
     let g = &out.occupancy;
     let occupied: Vec<usize> = (0..g.cells.len())
         .filter(|&i| g.cells[i] == CellState::Occupied)
@@ -159,7 +159,7 @@ fn bad_input_is_an_error_not_a_panic() {
             &[[0.0, 0.0, 0.0], [0.1, 0.1, 0.0]],
             &terrain,
             &GroundLimits::default(),
-            1.0
+            None
         ),
         Err(crate::PlannerError::TerrainTooSmall { .. })
     ));
