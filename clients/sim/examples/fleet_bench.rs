@@ -64,8 +64,8 @@ struct Args {
     /// The shiftd binary (default: beside this example's folder, i.e. target/release/shiftd).
     #[arg(long)]
     shiftd: Option<PathBuf>,
-    /// `[watch]` keys for the daemon, as TOML lines (e.g. `changed_memory_s = 0` to compare one build with a
-    /// behaviour off).
+    /// `[watch]` keys for the daemon, as TOML lines (e.g. `check_interval_ms = 50`), to compare settings on one
+    /// build.
     #[arg(long)]
     watch: Vec<String>,
 }

@@ -11,14 +11,13 @@ mod sweep;
 
 use std::sync::Arc;
 
-use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet, VecDeque};
+use std::collections::{BTreeMap, HashMap, HashSet, VecDeque};
 
 use shift_proto::{PlanEvent, PlanStatus, PoseView, RobotView, SiteSummary};
 
 pub use self::events::{Command, Event, JobOutcome};
 use crate::coverage::{CoverageKey, CoverageRecord, Raster};
 use crate::error::Result;
-use crate::hot_cells::{HotCell, HotCells};
 use crate::mission::{MissionRecord, MissionState};
 use crate::plan::PlanRecord;
 use crate::progress::ProgressParams;
@@ -88,10 +87,6 @@ pub struct Engine {
     coverage_viewed_ms: u64,
     /// When every mission was last looked over (robots lost or back, views due), milliseconds.
     missions_scanned_ms: Option<u64>,
-    /// Where each site's live map changed lately.
-    hot: HashMap<String, Arc<HotCells>>,
-    /// The changed cells each robot's window held at its last check.
-    hot_seen: HashMap<String, BTreeSet<HotCell>>,
 }
 
 /// Missions are looked over at most this often, and at every liveliness change (odometry brings thousands of

@@ -18,7 +18,6 @@ pub mod coverage;
 mod engine;
 pub mod error;
 pub mod field;
-pub mod hot_cells;
 pub mod job;
 pub mod live_map;
 pub mod live_maps;

@@ -40,10 +40,6 @@ pub struct WatchParams {
     /// A person standing in an aisle walks on; a wall stays. Meanwhile the robot's own safety layer holds it,
     /// and each check of its path (at its odometry, at most every `check_interval_ms`) looks again. 0 = at once.
     pub end_hold_s: f64,
-    /// A place where the live map changed checks the robots whose window comes to it for this long, seconds
-    /// (the live map's `horizon_s` by default: its points are gone after that too). 0 turns it off: such
-    /// obstacles are then met at the pose cadence alone.
-    pub changed_memory_s: f64,
 }
 
 impl Default for WatchParams {
@@ -56,7 +52,6 @@ impl Default for WatchParams {
             max_curvature_per_m: 0.0,
             check_interval_ms: 200,
             end_hold_s: 10.0,
-            changed_memory_s: 600.0,
         }
     }
 }
@@ -118,9 +113,6 @@ pub enum Trigger {
     MapChange,
     /// The robot moved (periodic re-check).
     Pose,
-    /// The robot's window took in a place where the live map changed within `changed_memory_s` (an obstacle
-    /// known before the robot came near it; see [`crate::hot_cells`]).
-    Approach,
 }
 
 /// The speed limits a correction is re-profiled with (the plan request's robot).

@@ -1,7 +1,6 @@
 //! Robots: presence, assignment and the routing of their sensor data that follows it, progress along the plan
 //! (with re-acquisition), whether a watched plan is blind, and when a robot's path is checked.
 
-use std::collections::BTreeSet;
 use std::sync::Arc;
 
 use shift_proto::{
@@ -10,7 +9,6 @@ use shift_proto::{
 
 use super::{Command, Engine};
 use crate::error::{EngineError, Result};
-use crate::hot_cells::{HotCell, HotCells};
 use crate::plan::MAX_JUMPS;
 use crate::progress::Advance;
 use crate::robots::{Assignment, Pose2};
@@ -170,30 +168,11 @@ impl Engine {
         self.watch_health(robot, now_ms, out);
         self.robot_changed(robot, out);
         let Some(r) = self.robots.get(robot) else { return };
-        // A robot found elsewhere on its plan has a new window ahead: look at it now. So has one whose window
-        // just took in a place where the live map changed (an obstacle seen before it came near).
-        let approaching = self
-            .hot_near(robot, now_ms)
-            .is_some_and(|near| self.hot_seen.get(robot).is_none_or(|seen| !near.is_subset(seen)));
+        // A robot found elsewhere on its plan has a new window ahead: look at it now.
         let due = reacquired || r.watch.last_check_ms + self.config.watch.check_interval_ms <= now_ms;
-        if approaching {
-            self.check(robot, Trigger::Approach, now_ms, out);
-        } else if due {
+        if due {
             self.check(robot, Trigger::Pose, now_ms, out);
         }
-    }
-
-    /// The changed cells of its site's live map within `robot`'s window, as of its last pose; `None` without
-    /// an assignment, a pose or changes.
-    fn hot_near(&self, robot: &str, now_ms: u64) -> Option<BTreeSet<HotCell>> {
-        let r = self.robots.get(robot)?;
-        let (a, pose) = (r.assignment.as_ref()?, r.pose?);
-        let site = &self.plans.get(&a.plan_id)?.request.site;
-        let near = self
-            .hot
-            .get(site)?
-            .near([pose.x, pose.y], self.config.watch.window_radius_m, now_ms);
-        (!near.is_empty()).then_some(near)
     }
 
     /// Robots' points reached `site`'s live map: plans watched there see again.
@@ -249,15 +228,6 @@ impl Engine {
         now_ms: u64,
         out: &mut Vec<Command>,
     ) {
-        let memory_ms = (self.config.watch.changed_memory_s.max(0.0) * 1e3) as u64;
-        if memory_ms > 0 {
-            let reach = self.config.watch.window_radius_m;
-            let hot = self
-                .hot
-                .entry(site.to_owned())
-                .or_insert_with(|| Arc::new(HotCells::new(reach / 6.0, memory_ms)));
-            Arc::make_mut(hot).mark(min, max, now_ms);
-        }
         let reach = self.config.watch.window_radius_m;
         let near: Vec<String> = self
             .robots
@@ -282,7 +252,6 @@ impl Engine {
         if !self.config.watch.enabled {
             return;
         }
-        let hot = self.hot_near(robot, now_ms);
         let Some(r) = self.robots.get_mut(robot) else { return };
         let (Some(a), Some(pose)) = (&r.assignment, r.pose) else {
             return;
@@ -299,10 +268,6 @@ impl Engine {
             return;
         };
         let spec = &rec.request.robot;
-        match hot {
-            Some(near) => self.hot_seen.insert(robot.to_owned(), near),
-            None => self.hot_seen.remove(robot),
-        };
         r.watch.in_flight = true;
         r.watch.pending = false;
         r.watch.last_check_ms = now_ms;

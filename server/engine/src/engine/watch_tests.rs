@@ -11,7 +11,7 @@ use shift_proto::{
 use super::tests::{engine, request};
 use super::*;
 use crate::robots::Pose2;
-use crate::watch::{CheckOutcome, ProposedCorrection, Trigger};
+use crate::watch::{CheckOutcome, ProposedCorrection};
 
 fn wp(x: f64, y: f64, t: f64) -> WaypointDoc {
     WaypointDoc {
@@ -359,51 +359,5 @@ proptest! {
         }
         prop_assert_eq!(&replayed, &*shown);
         prop_assert_eq!(e.plan("p-1").map(|r| r.version), Some(shown.version));
-    }
-}
-
-fn triggers(cmds: &[Command]) -> Vec<Trigger> {
-    cmds.iter()
-        .filter_map(|c| match c {
-            Command::StartCheck(j) => Some(j.trigger),
-            _ => None,
-        })
-        .collect()
-}
-
-#[test]
-fn a_robot_coming_to_a_place_that_changed_earlier_is_checked_at_once() {
-    for memory_s in [600.0, 0.0] {
-        let (mut e, _) = assigned();
-        e.config.watch.changed_memory_s = memory_s;
-        e.config.watch.window_radius_m = 1.0;
-        e.handle(pose(0.5), 1000).expect("pose");
-        e.handle(finished(1, CheckOutcome::Clear), 1001).expect("done");
-        // An obstacle seen 1.8 m ahead (another robot saw it, or this one from afar): beyond the 1 m window.
-        let ahead = Event::MapChanged {
-            site: "s".into(),
-            min: [2.3, 0.4],
-            max: [2.4, 0.6],
-        };
-        assert!(checks(&e.handle(ahead, 1002).expect("map")).is_empty());
-        assert!(
-            checks(&e.handle(pose(1.0), 1050).expect("pose")).is_empty(),
-            "still 1.3 m away"
-        );
-        // The window reaches it 100 ms after the last check, inside the 200 ms pose cadence.
-        let c = e.handle(pose(1.5), 1100).expect("pose");
-        if memory_s > 0.0 {
-            assert_eq!(
-                triggers(&c),
-                vec![Trigger::Approach],
-                "checked as soon as it comes near"
-            );
-            e.handle(finished(1, CheckOutcome::Clear), 1101).expect("done");
-            // Nearer the same place, within the cadence: nothing new.
-            assert!(checks(&e.handle(pose(1.6), 1150).expect("pose")).is_empty());
-        } else {
-            assert!(triggers(&c).is_empty(), "without memory: only the cadence");
-            assert_eq!(triggers(&e.handle(pose(1.6), 1200).expect("pose")), vec![Trigger::Pose]);
-        }
     }
 }
