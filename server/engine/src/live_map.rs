@@ -192,10 +192,7 @@ impl LiveMap {
 
     /// Height of the ground under map-frame (x, y), metres (0 without a ground).
     fn ground_at(&self, x: f64, y: f64) -> f64 {
-        self.ground.as_ref().map_or(0.0, |s| {
-            let (lo, hi) = s.domain();
-            s.height_at(x.clamp(lo[0], hi[0]), y.clamp(lo[1], hi[1])).unwrap_or(0.0)
-        })
+        self.ground.as_ref().and_then(|s| s.height_clamped(x, y)).unwrap_or(0.0)
     }
 
     /// Adds obstacle points given in the map frame, metres, whose z measures `heights` (2-D scans skip the

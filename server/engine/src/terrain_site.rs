@@ -138,9 +138,8 @@ impl TerrainSite {
 /// Sets each waypoint's z to the ground height under it. The surface is interpolated between cell centres; a
 /// waypoint in the outer half cell takes the height at the nearest point of that domain.
 pub fn set_ground_height(surface: &TerrainSurface, waypoints: &mut [WaypointDoc]) {
-    let (lo, hi) = surface.domain();
     for w in waypoints {
-        if let Some(z) = surface.height_at(w.x.clamp(lo[0], hi[0]), w.y.clamp(lo[1], hi[1])) {
+        if let Some(z) = surface.height_clamped(w.x, w.y) {
             w.z = z;
         }
     }

@@ -54,15 +54,12 @@ pub async fn get_live(
         return Err(ApiError::not_found(format!("unknown site {site:?}")));
     }
     let max = query.max_points.unwrap_or(LIVE_POINTS_DEFAULT);
-    let all: Vec<[f64; 2]> = state
+    let all = state
         .live
         .get(&site)
-        .and_then(|live| {
-            let map = live.map.read().ok()?;
-            Some(map.points().all().iter().map(|p| [p.x, p.y]).collect())
-        })
+        .and_then(|live| Some(live.map.read().ok()?.points().all()))
         .unwrap_or_default();
-    let points = thin(&all, max);
+    let points: Vec<[f64; 2]> = thin(&all, max).iter().map(|p| [p.x, p.y]).collect();
     Ok(ApiJson(LivePoints {
         site,
         count: all.len(),

@@ -40,16 +40,6 @@ impl<'a> LivePoints<'a> {
         Point2::new(self.origin.x + f64::from(q.x), self.origin.y + f64::from(q.y))
     }
 
-    /// Points held.
-    pub fn len(&self) -> usize {
-        self.tree.len()
-    }
-
-    /// True when no point is held.
-    pub fn is_empty(&self) -> bool {
-        self.tree.is_empty()
-    }
-
     /// The point nearest to `p` (map frame) with its distance, metres; `None` when empty or `p` is not finite.
     #[inline]
     pub fn nearest(&self, p: Point2) -> Option<(Point2, f64)> {

@@ -123,6 +123,13 @@ impl TerrainSurface {
         })
     }
 
+    /// Height of the surface at map-frame (x, y), metres, taking a point beyond the domain to its nearest edge;
+    /// `None` only for a non-finite point.
+    pub fn height_clamped(&self, x: f64, y: f64) -> Option<f64> {
+        let (lo, hi) = self.domain();
+        self.height_at(x.clamp(lo[0], hi[0]), y.clamp(lo[1], hi[1]))
+    }
+
     /// Surface area of cell `i`'s share of the surface, m²: the dual cell around its centre (halved on the
     /// border of the domain, quartered at its corners) times √(1 + z_u² + z_v²).
     pub fn cell_area(&self, i: usize) -> f64 {
