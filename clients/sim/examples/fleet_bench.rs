@@ -68,6 +68,13 @@ struct Args {
     /// build.
     #[arg(long)]
     watch: Vec<String>,
+    /// Where the daemon's stderr (its log, filtered by `RUST_LOG` as this process's is) goes; discarded without.
+    #[arg(long)]
+    daemon_log: Option<PathBuf>,
+    /// Writes each run's whole simulator report (per robot) to `PATH` with the fleet size appended
+    /// (`PATH.30.json`).
+    #[arg(long)]
+    report: Option<PathBuf>,
 }
 
 fn warehouse() -> PathBuf {
@@ -160,7 +167,7 @@ struct Daemon {
 }
 
 impl Daemon {
-    async fn start(bin: &Path, dir: &Path, watch: &[String]) -> Result<Self> {
+    async fn start(bin: &Path, dir: &Path, watch: &[String], log: Option<&Path>) -> Result<Self> {
         let (port, zport) = (free_port()?, free_port()?);
         let endpoint = format!("tcp/127.0.0.1:{zport}");
         let config = dir.join("shiftd.toml");
@@ -182,7 +189,12 @@ impl Daemon {
             .arg("--config")
             .arg(&config)
             .stdout(Stdio::null())
-            .stderr(Stdio::null())
+            .stderr(match log {
+                Some(path) => {
+                    Stdio::from(std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?)
+                }
+                None => Stdio::null(),
+            })
             .spawn()
             .with_context(|| format!("starting {} (cargo build --release -p shiftd)", bin.display()))?;
         let d = Self {
@@ -306,7 +318,7 @@ struct RunFigures {
 
 async fn run_fleet(args: &Args, bin: &Path, n: usize) -> Result<RunFigures> {
     let dir = tempfile::tempdir()?;
-    let daemon = Daemon::start(bin, dir.path(), &args.watch).await?;
+    let daemon = Daemon::start(bin, dir.path(), &args.watch, args.daemon_log.as_deref()).await?;
     let client = Client::new(&daemon.base)?;
     let scene = warehouse();
     let yaml = std::fs::read_to_string(scene.join("map.yaml"))?;
@@ -471,6 +483,11 @@ async fn main() -> Result<()> {
     for &n in &args.robots {
         let figures = run_fleet(&args, &bin, n).await?;
         print(&figures, &args);
+        if let Some(path) = &args.report {
+            let path = path.with_extension(format!("{n}.json"));
+            std::fs::write(&path, serde_json::to_vec_pretty(&figures.report)?)
+                .with_context(|| format!("writing {}", path.display()))?;
+        }
     }
     Ok(())
 }

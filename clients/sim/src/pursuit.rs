@@ -152,6 +152,35 @@ impl Follower {
         self.finished = false;
     }
 
+    /// One correction replaced waypoints `[from, to)` of the path by `inserted` waypoints (`wps` is the new
+    /// path): the target moves with the waypoint it named, as the daemon moves the robot's progress. A target
+    /// inside the replaced stretch becomes the patch's waypoint nearest the robot (the later on a tie), so the
+    /// robot neither turns back for the patch's start nor cuts into it. Unlike [`Self::reacquire`] this never
+    /// jumps to another pass of the path that happens to run by.
+    pub fn corrected(&mut self, from: usize, to: usize, inserted: usize, wps: &[WaypointDoc], body: &DiffDrive) {
+        if wps.is_empty() {
+            self.target = 0;
+            return;
+        }
+        let last = wps.len() - 1;
+        let t = self.target;
+        self.target = if t >= to {
+            t + inserted - (to - from).min(t)
+        } else if t >= from {
+            let d2 = |i: usize| (wps[i].x - body.x).powi(2) + (wps[i].y - body.y).powi(2);
+            let hi = (from + inserted).min(last);
+            // The nearest, the later on a tie.
+            (from.min(hi)..=hi)
+                .rev()
+                .min_by(|&a, &b| d2(a).total_cmp(&d2(b)))
+                .unwrap_or(hi)
+        } else {
+            t
+        }
+        .min(last);
+        self.finished = false;
+    }
+
     /// Gives up the target (a robot blocked too long, as a waypoint follower that does not stop on a failed
     /// goal): heads for the first later waypoint more than `clear_m` from it, or finishes when none is; returns
     /// the waypoints given up.
@@ -282,5 +311,40 @@ mod tests {
         );
         let p = &patched[f.target()];
         assert!(p.x >= body.x - 0.3, "{} behind {}", p.x, body.x);
+    }
+
+    #[test]
+    fn a_correction_moves_the_target_with_its_waypoint_not_to_a_later_pass_running_by() {
+        // East along y = 0, back west along y = 0.3 (a lane closer than the robot's path is to it).
+        let mut wps: Vec<_> = (0..=20).map(|i| wp(f64::from(i) * 0.25, 0.0)).collect();
+        wps.extend((0..=20).map(|i| wp(5.0 - f64::from(i) * 0.25, 0.3)));
+        let body = DiffDrive::at(1.0, 0.2, 0.0); // nearer the return lane than its own
+        let patched_at = |from: usize, to: usize, inserted: usize| {
+            let mut p = wps[..from].to_vec();
+            p.extend((0..inserted).map(|i| wp(3.0 + f64::from(i as u32) * 0.1, -0.4)));
+            p.extend_from_slice(&wps[to..]);
+            p
+        };
+        // A patch further on (waypoints 12..14 → 5): the target (5, at x = 1.25) keeps naming that waypoint.
+        let mut f = Follower::new(0.2);
+        f.target = 5;
+        f.corrected(12, 14, 5, &patched_at(12, 14, 5), &body);
+        assert_eq!(f.target(), 5);
+        // A patch behind: the target shifts with its waypoint.
+        f.target = 15;
+        let p = patched_at(2, 4, 5);
+        f.corrected(2, 4, 5, &p, &body);
+        assert_eq!(f.target(), 18);
+        assert_eq!((p[18].x, p[18].y), (wps[15].x, wps[15].y));
+        // The target replaced: the patch's waypoint nearest the robot, never the return lane running by.
+        f.target = 13;
+        let p = patched_at(12, 14, 5);
+        f.corrected(12, 14, 5, &p, &body);
+        assert!((12..=17).contains(&f.target()), "{}", f.target());
+        // Whereas the nearest-waypoint search finds the return lane.
+        let mut g = Follower::new(0.2);
+        g.target = 5;
+        g.reacquire(wps.len(), &wps, &body);
+        assert!(g.target() > 20, "the search this replaces would jump to {}", g.target());
     }
 }

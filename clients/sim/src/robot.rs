@@ -168,16 +168,21 @@ impl SimRobot {
             .followed
             .doc()
             .map(|d| (d.plan_id.clone(), d.version, d.waypoints.len()));
+        // The patch of a correction, to move the target with it when it alone is applied.
+        let mut patch = None;
         let applied = match message {
             RobotMessage::Plan(doc) => self.followed.on_plan(doc),
-            RobotMessage::Correction(c) => match self.followed.on_correction(c) {
-                Ok(a) => a,
-                Err(e) => {
-                    tracing::warn!(robot = %self.spec.id, "correction not applied: {e}");
-                    self.stats.corrections_rejected += 1;
-                    return Applied::Stale;
+            RobotMessage::Correction(c) => {
+                patch = Some((c.version, c.from, c.to, c.waypoints.len()));
+                match self.followed.on_correction(c) {
+                    Ok(a) => a,
+                    Err(e) => {
+                        tracing::warn!(robot = %self.spec.id, "correction not applied: {e}");
+                        self.stats.corrections_rejected += 1;
+                        return Applied::Stale;
+                    }
                 }
-            },
+            }
             RobotMessage::Status(status) => return self.followed.on_status(&status),
         };
         let Some(doc) = self.followed.doc() else {
@@ -193,10 +198,16 @@ impl SimRobot {
             }
             (Applied::Correction { version }, Some((_, old_version, old_len))) => {
                 self.stats.corrections_applied += version.saturating_sub(old_version);
+                match patch {
+                    Some((v, from, to, inserted)) if v == *version && v == old_version + 1 => {
+                        self.follower.corrected(from, to, inserted, &doc.waypoints, &self.body);
+                    }
+                    // Held corrections applied with it: their patches are not all known here.
+                    _ => self.follower.reacquire(old_len, &doc.waypoints, &self.body),
+                }
                 if let Some(w) = doc.waypoints.get(self.follower.target()) {
                     tracing::info!(robot = %self.spec.id, version, x = self.body.x, y = self.body.y, target_x = w.x, target_y = w.y, "correction applied");
                 }
-                self.follower.reacquire(old_len, &doc.waypoints, &self.body);
             }
             (Applied::Gap { .. }, _) => self.stats.gaps += 1,
             _ => {}
@@ -213,6 +224,11 @@ impl SimRobot {
     /// Its last scan's returns in the map frame.
     pub fn seen(&self) -> &[Point2] {
         &self.seen
+    }
+
+    /// Index of the waypoint it is heading for.
+    pub fn target_index(&self) -> usize {
+        self.follower.target()
     }
 
     /// The waypoints it has still to reach, from its current target on while they stay within `within_m` of

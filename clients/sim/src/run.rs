@@ -114,12 +114,21 @@ pub async fn run(opts: &RunOptions) -> Result<Report, SimError> {
     let mut traffic = Traffic::default();
     while sim.t < opts.timeout_s && !sim.all_finished() {
         while let Ok((i, message)) = messages.try_recv() {
-            match sim.robots[i].on_message(message) {
-                Applied::Gap { .. } => nets[i].request_plan(),
+            let applied = sim.robots[i].on_message(message);
+            let id = &sim.robots[i].spec.id;
+            match applied {
+                Applied::Gap { .. } => {
+                    tracing::debug!(robot = %id, t = sim.t, "version gap: fetching the plan");
+                    nets[i].request_plan();
+                }
                 Applied::Watch {
                     health: WatchHealth::Blocked,
                 } => sights[i].on_held(clock.wall_s()),
-                Applied::Correction { .. } => sights[i].on_correction(clock.wall_s()),
+                Applied::Correction { version } => {
+                    if let Some(ms) = sights[i].on_correction(clock.wall_s()) {
+                        tracing::debug!(robot = %id, t = sim.t, version, latency_ms = ms, "sight answered");
+                    }
+                }
                 _ => {}
             }
         }
@@ -137,9 +146,24 @@ pub async fn run(opts: &RunOptions) -> Result<Report, SimError> {
                     let r = &sim.robots[robot];
                     let ahead = r.path_ahead(window.window_radius_m);
                     // Known to the daemon already when it holds the plan's end at a blockage.
-                    let news = r.followed.watch() != Some(WatchHealth::Blocked)
-                        && news_on_path(r.seen(), &ahead, r.position(), r.spec.radius, window, &static_grid);
-                    sights[robot].on_scan(clock.wall_s(), news);
+                    let news = (r.followed.watch() != Some(WatchHealth::Blocked))
+                        .then(|| news_on_path(r.seen(), &ahead, r.position(), r.spec.radius, window, &static_grid))
+                        .flatten();
+                    if sights[robot].on_scan(clock.wall_s(), news.is_some())
+                        && let Some(seen) = news
+                    {
+                        let p = r.position();
+                        tracing::debug!(
+                            robot = %r.spec.id,
+                            t = sim.t,
+                            x = p.x,
+                            y = p.y,
+                            seen_x = seen.x,
+                            seen_y = seen.y,
+                            target = r.target_index(),
+                            "sight"
+                        );
+                    }
                 }
             }
         }

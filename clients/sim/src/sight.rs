@@ -26,8 +26,8 @@ impl Default for WatchWindow {
     }
 }
 
-/// True when one of `seen` (map frame) is new to `map` and lies across `path` (the waypoints from the robot's
-/// target on) inside the window round `robot`.
+/// The first of `seen` (map frame) that is new to `map` and lies across `path` (the waypoints from the robot's
+/// target on) inside the window round `robot`, if any.
 pub fn news_on_path(
     seen: &[Point2],
     path: &[Point2],
@@ -35,16 +35,16 @@ pub fn news_on_path(
     radius_m: f64,
     window: WatchWindow,
     map: &OccupancyGrid,
-) -> bool {
+) -> Option<Point2> {
     let ahead: Vec<Point2> = path
         .iter()
         .copied()
         .take_while(|p| (*p - robot).norm() <= window.window_radius_m)
         .collect();
     if ahead.is_empty() {
-        return false;
+        return None;
     }
-    seen.iter().any(|p| {
+    seen.iter().copied().find(|p| {
         (*p - robot).norm() <= window.window_radius_m + radius_m
             && ahead.iter().any(|q| (*p - *q).norm() < radius_m)
             && !near_known(map, *p)
@@ -98,20 +98,24 @@ impl SightClock {
         }
     }
 
-    /// A scan published at wall time `now_s` did (`news`) or did not show news on the path.
-    pub fn on_scan(&mut self, now_s: f64, news: bool) {
+    /// A scan published at wall time `now_s` did (`news`) or did not show news on the path; true when it
+    /// starts a sight.
+    pub fn on_scan(&mut self, now_s: f64, news: bool) -> bool {
         self.expire(now_s);
-        if news && self.pending.is_none() {
+        let starts = news && self.pending.is_none();
+        if starts {
             self.pending = Some(now_s);
         }
+        starts
     }
 
-    /// A correction was applied at wall time `now_s`.
-    pub fn on_correction(&mut self, now_s: f64) {
+    /// A correction was applied at wall time `now_s`; the latency of the sight it answered, milliseconds.
+    pub fn on_correction(&mut self, now_s: f64) -> Option<f64> {
         self.expire(now_s);
-        if let Some(t0) = self.pending.take() {
-            self.latencies_ms.push((now_s - t0) * 1e3);
-        }
+        let t0 = self.pending.take()?;
+        let ms = (now_s - t0) * 1e3;
+        self.latencies_ms.push(ms);
+        Some(ms)
     }
 
     fn expire(&mut self, now_s: f64) {
@@ -141,20 +145,23 @@ mod tests {
         let path: Vec<Point2> = (0..80).map(|k| Point2::new(1.0 + 0.1 * f64::from(k), 5.0)).collect();
         let w = WatchWindow::default();
         let on_path = [Point2::new(2.5, 5.1)];
-        assert!(news_on_path(&on_path, &path, robot, 0.25, w, &map));
+        assert_eq!(news_on_path(&on_path, &path, robot, 0.25, w, &map), Some(on_path[0]));
         // Only inside the clearance margin, beside the path, beyond the window, or on a known wall: no news.
-        assert!(!news_on_path(&[Point2::new(2.5, 5.28)], &path, robot, 0.25, w, &map));
-        assert!(!news_on_path(&[Point2::new(2.5, 5.6)], &path, robot, 0.25, w, &map));
-        assert!(!news_on_path(&[Point2::new(6.0, 5.0)], &path, robot, 0.25, w, &map));
+        assert!(news_on_path(&[Point2::new(2.5, 5.28)], &path, robot, 0.25, w, &map).is_none());
+        assert!(news_on_path(&[Point2::new(2.5, 5.6)], &path, robot, 0.25, w, &map).is_none());
+        assert!(news_on_path(&[Point2::new(6.0, 5.0)], &path, robot, 0.25, w, &map).is_none());
         let wall_path: Vec<Point2> = (0..30).map(|k| Point2::new(5.05, 6.5 + 0.1 * f64::from(k))).collect();
-        assert!(!news_on_path(
-            &[Point2::new(5.05, 9.05)],
-            &wall_path,
-            Point2::new(5.05, 6.5),
-            0.25,
-            w,
-            &map
-        ));
+        assert!(
+            news_on_path(
+                &[Point2::new(5.05, 9.05)],
+                &wall_path,
+                Point2::new(5.05, 6.5),
+                0.25,
+                w,
+                &map
+            )
+            .is_none()
+        );
     }
 
     #[test]

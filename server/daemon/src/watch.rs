@@ -57,6 +57,9 @@ impl CheckRunner {
                         from = p.from,
                         to = p.to,
                         iterations = p.iterations,
+                        trigger = ?job.trigger,
+                        ahead_from = job.ahead_from,
+                        version = job.doc.version,
                         compute_us,
                         "path check proposes a correction"
                     );
@@ -67,7 +70,15 @@ impl CheckRunner {
                     metrics::counter!("shift_check_failed_total").increment(1);
                     tracing::debug!(robot = job.robot, "path check failed: {why}");
                 }
-                CheckOutcome::Clear => tracing::debug!(robot = job.robot, compute_us, "path check: clear"),
+                CheckOutcome::Clear => tracing::debug!(
+                    robot = job.robot,
+                    trigger = ?job.trigger,
+                    ahead_from = job.ahead_from,
+                    x = job.pose.x,
+                    y = job.pose.y,
+                    compute_us,
+                    "path check: clear"
+                ),
             }
             // The engine must learn of every end (it keeps one check per robot in flight).
             let _ = to_engine.blocking_tell(Msg::event(Event::CheckFinished {

@@ -1,9 +1,9 @@
 //! How far a robot is along its plan, from its odometry alone.
 //!
-//! Normal driving: the nearest waypoint within `tolerance_m` among the next `window` waypoints after the last
-//! one reached (a path that passes the same place twice is followed in order). Where several are equally near
-//! (a self-crossing, lanes closer than the tolerance), the one whose path direction agrees with the robot's
-//! heading wins.
+//! Normal driving: among the next `window` waypoints after the last one reached, those within `tolerance_m` of
+//! the pose on the first pass of the path by it (a path that passes the same place twice is followed in order),
+//! and of them the nearest. Where several of that pass are equally near (a lane's end and the next lane, closer
+//! than the tolerance), the one whose path direction agrees with the robot's heading wins.
 //!
 //! Re-acquisition: a robot that joins late, was carried, relocalised or drove on while the daemon restarted is
 //! not near the expected waypoint. Then the whole plan is searched through a grid index over the waypoints (built
@@ -204,6 +204,24 @@ impl Assignment {
         if agree.is_empty() { candidates } else { agree }
     }
 
+    /// Of `candidates` (index ascending, each within `tol` of one pose), those of the first pass of the path
+    /// by the pose: a later pass starts where the path between two candidates is longer than `2 tol`, i.e. it
+    /// left the pose's neighbourhood and came back. A plan that passes a place twice is driven in order, so a
+    /// robot near both passes is on the first one it has not driven, whatever its heading says (a robot
+    /// turning on the spot at its dock faces a lane that passes the dock later).
+    fn first_pass(&self, candidates: Vec<(usize, f64)>, tol: f64) -> Vec<(usize, f64)> {
+        let mut pass = Vec::with_capacity(candidates.len());
+        for c in candidates {
+            if let Some(&(prev, _)) = pass.last()
+                && self.arc_at(c.0) - self.arc_at(prev) > 2.0 * tol
+            {
+                break;
+            }
+            pass.push(c);
+        }
+        pass
+    }
+
     /// Updates the progress from a pose at `(x, y)` moving along `heading` (radians, map frame; `None` when
     /// unknown). See the module docs.
     pub fn advance(&mut self, x: f64, y: f64, heading: Option<f64>, params: &ProgressParams) -> Advance {
@@ -225,9 +243,10 @@ impl Assignment {
         }
         if !local.is_empty() {
             self.behind = 0;
-            // Nearest, ties to the earlier waypoint.
+            // The first pass ahead, then its nearest waypoint, ties to the earlier one.
+            let pass = self.first_pass(local, tol);
             let best = self
-                .agreeing(local, heading)
+                .agreeing(pass, heading)
                 .into_iter()
                 .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
             return match best {

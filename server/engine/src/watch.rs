@@ -197,17 +197,25 @@ pub fn run_check(job: &CheckJob, live: Option<LivePoints<'_>>) -> CheckOutcome {
     };
     let robot = Point2::new(job.pose.x, job.pose.y);
     let ahead = job.ahead_from.min(path.len() - 2);
-    let breaches = correct::judge(&path, ahead, robot, &world, &job.params);
-    let Some(first) = breaches.first() else {
-        return CheckOutcome::Clear;
-    };
-    let repair = match correct::repair(&path, first, &world, &job.params) {
-        Ok(r) => r,
-        Err(e) => return CheckOutcome::Failed(e.to_string()),
-    };
-    if !correct::worth_publishing(first, &repair, &world, &job.params) {
-        return CheckOutcome::Clear;
+    // The first breach whose repair is worth a version: a stretch that only lacks margin, or an escape the
+    // path already makes, does not hide a collision further on.
+    let mut failed = None;
+    let mut chosen = None;
+    for breach in correct::judge(&path, ahead, robot, &world, &job.params) {
+        match correct::repair(&path, &breach, &world, &job.params) {
+            Ok(r) if correct::worth_publishing(&breach, &r, &world, &job.params) => {
+                chosen = Some(r);
+                break;
+            }
+            Ok(_) => {}
+            Err(e) => {
+                failed.get_or_insert(e);
+            }
+        }
     }
+    let Some(repair) = chosen else {
+        return failed.map_or(CheckOutcome::Clear, |e| CheckOutcome::Failed(e.to_string()));
+    };
     let timed = |i: usize| TimedWaypoint {
         position: path[i],
         v_mps: w[i].v,

@@ -139,6 +139,45 @@ fn at_a_self_crossing_the_heading_keeps_the_branch_being_driven() {
 }
 
 #[test]
+fn a_robot_turning_at_its_dock_stays_on_the_first_pass_though_a_later_lane_passes_the_dock_its_way() {
+    // East from the dock at (0, 0), round, and later north along x = 0.2, past the dock again.
+    let mut pts: Vec<(f64, f64)> = (0..=50).map(|i| (i as f64 * 0.1, 0.0)).collect();
+    pts.extend((1..=20).map(|i| (5.0, -(i as f64) * 0.1)));
+    pts.extend((1..=48).map(|i| (5.0 - i as f64 * 0.1, -2.0)));
+    pts.extend((1..=50).map(|i| (0.2, -2.0 + i as f64 * 0.1)));
+    let p = ProgressParams {
+        tolerance_m: 0.5,
+        window: 400,
+        back_confirm: 3,
+    };
+    let mut a = Assignment::new("p-1".into(), doc(&pts));
+    // Still facing north while it turns on the spot towards the first lane: the later lane agrees with its
+    // heading, the first one does not; it has driven neither.
+    for k in 0..=8 {
+        let yaw = std::f64::consts::FRAC_PI_2 * (1.0 - f64::from(k) / 8.0);
+        a.advance(0.01, 0.0, Some(yaw), &p);
+        assert!(
+            a.index <= 1,
+            "turning at the dock (yaw {yaw:.2}) moved progress to {}",
+            a.index
+        );
+    }
+    // Then it drives the plan in order, through the later pass too.
+    let mut last = 0;
+    for (k, &(x, y)) in pts.iter().enumerate().skip(1) {
+        let (px, py) = pts[k - 1];
+        a.advance(x, y, Some((y - py).atan2(x - px)), &p);
+        assert!(
+            a.index >= last && a.index <= k,
+            "at waypoint {k} progress is {}",
+            a.index
+        );
+        last = a.index;
+    }
+    assert!(a.finished());
+}
+
+#[test]
 fn a_robot_first_seen_far_along_its_plan_is_found_there() {
     let pts = crossing_path();
     let p = ProgressParams {

@@ -12,12 +12,15 @@
 //!    anchor ([`RepairKind::Skipped`]).
 //!
 //! Every returned patch passes [`verify`]: each segment keeps the robot radius from the static map (DESIGN
-//! §6 metric) and the live points, and stays on the map. [`apply`] splices a patch into the path and
+//! §6 metric) and the live points, and stays on the map. The one exception is an **escape** ([`Escape`],
+//! `escape.rs`): a robot that saw an obstacle late and already stands closer than its radius to it gets a
+//! patch that never comes closer than it is and has the radius back within a short way. [`apply`] splices a patch into the path and
 //! [`retime`] gives it speeds and times. Map frame, metres, radians; no I/O, no clock, deterministic.
 
 mod cost;
 mod detour;
 mod error;
+mod escape;
 mod judge;
 mod lbfgs;
 mod local;
@@ -97,6 +100,19 @@ pub struct Repair {
     pub cost_after: f64,
     /// Stretch of the original path that a Skipped repair leaves out (polyline, for the plan's "missed" list).
     pub skipped: Vec<Point2>,
+    /// Set for an escape (see the `escape` module): the start anchor was already closer than the radius to a
+    /// live obstacle; `None` for a patch that keeps the radius everywhere.
+    pub escape: Option<Escape>,
+}
+
+/// What an escape keeps, and whether the path needed one.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Escape {
+    /// The patch keeps at least this clearance from live obstacles until it has the radius back, metres.
+    pub floor_m: f64,
+    /// False when the path itself already leads out of the band as the escape does (within the same
+    /// allowance, never closer than the floor): then the escape is not worth a new version.
+    pub needed: bool,
 }
 
 /// Splices a repair into a path: `path[..from] ++ r.waypoints ++ path[to..]` (ranges clamped to the path).
@@ -113,7 +129,13 @@ pub fn apply(path: &[Point2], r: &Repair) -> Vec<Point2> {
 /// Whether `r` is worth publishing for `breach`. A collision (clearance under the radius) always is. A
 /// stretch that only lacks margin is worth it only when an optimised patch clears it by at least 1 cm more:
 /// a detour or skip keeps just the radius itself, and would be "repaired" again at every later check.
+///
+/// An escape is worth it only when the path does not lead out of the band by itself: an escape published once
+/// is not published again at every check while the robot drives out along it.
 pub fn worth_publishing(breach: &Breach, r: &Repair, world: &World<'_>, p: &CorrectParams) -> bool {
+    if let Some(e) = r.escape {
+        return e.needed;
+    }
     breach.min_clearance_m < p.robot_radius_m
         || (r.kind == RepairKind::Optimised
             && min_clearance(&r.waypoints, world, p.d_safe()) > breach.min_clearance_m + 0.01)

@@ -10,7 +10,7 @@ use crate::map::{CellState, OccupancyGrid};
 
 use super::optimize::{Window, optimise_window};
 use super::path::Arclen;
-use super::tests::{Site, blob, to_path, walled};
+use super::tests::{Site, after_arc, blob, to_path, walled};
 use super::*;
 
 /// A random scene: a walled free box with a few static disks, a polyline inside, live clusters on it.
@@ -70,7 +70,16 @@ proptest! {
             }
             let (clear, on_map) = site.oracle(&r.waypoints);
             prop_assert!(on_map, "{:?} left the map", r.kind);
-            prop_assert!(clear >= p.robot_radius_m, "{:?} clearance {}", r.kind, clear);
+            if let Some(e) = r.escape {
+                // The robot already stood inside the band: never closer than it was, the radius within the
+                // escape's allowance and from there on.
+                prop_assert!(e.floor_m < p.robot_radius_m && clear >= e.floor_m - 1e-9, "{:?} escape {:?} clearance {}", r.kind, e, clear);
+                let allowance = 2.0 * (p.robot_radius_m - e.floor_m) + 2.0 * p.spacing_m + 0.01;
+                let (rest, _) = site.oracle(&after_arc(&r.waypoints, allowance));
+                prop_assert!(r.waypoints.len() == 1 || rest >= p.robot_radius_m, "{:?} escape {:?}: {} after the allowance", r.kind, e, rest);
+            } else {
+                prop_assert!(clear >= p.robot_radius_m, "{:?} clearance {}", r.kind, clear);
+            }
             prop_assert!(r.from <= r.to && r.to <= path.len());
             // Fixed ends: the anchors lie on the kept join pieces of the original path.
             let first = r.waypoints[0];

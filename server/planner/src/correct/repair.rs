@@ -6,6 +6,7 @@ use crate::geom::Point2;
 use super::cost::WindowCost;
 use super::detour::{LocalGrid, shortcut_chain};
 use super::error::CorrectError;
+use super::escape::EscapeCase;
 use super::judge::{Breach, sample_step};
 use super::lbfgs::{Minimum, Objective, minimize};
 use super::local::LocalObstacles;
@@ -30,7 +31,28 @@ const SKIP_MAX_CELLS: usize = 250_000;
 /// Fails on invalid params, an unusable path (fewer than two points, a non-finite point, zero length) or
 /// breach, an inconsistent world, or a start anchor that is itself in collision; never returns a colliding
 /// patch.
+///
+/// A start anchor closer than the radius to live obstacles only (the robot saw something late and is already
+/// inside the band) gets an escape instead of the error when one exists ([`super::Escape`]).
 pub fn repair(path: &[Point2], breach: &Breach, world: &World<'_>, p: &CorrectParams) -> Result<Repair, CorrectError> {
+    match repair_keeping(path, breach, world, p) {
+        Err(CorrectError::AnchorInCollision { x, y, clearance_m }) => EscapeCase::new(world, p, Point2::new(x, y))
+            .and_then(|case| {
+                let rep = repair_keeping(path, breach, world, &case.thin).ok()?;
+                case.accept(rep, path, breach, world, p)
+            })
+            .ok_or(CorrectError::AnchorInCollision { x, y, clearance_m }),
+        other => other,
+    }
+}
+
+/// [`repair`] without the escape: every patch keeps `p.robot_radius_m` from its start anchor on.
+fn repair_keeping(
+    path: &[Point2],
+    breach: &Breach,
+    world: &World<'_>,
+    p: &CorrectParams,
+) -> Result<Repair, CorrectError> {
     let (r, s_a, s_b) = prepare(path, breach, world, p)?;
     let mut plan = r.windows(s_a, s_b)?;
     if let Some(rep) = r.optimise(&mut plan) {
@@ -363,6 +385,7 @@ impl<'w> Repairer<'_, 'w> {
             cost_before,
             cost_after,
             skipped,
+            escape: None,
         }
     }
 

@@ -79,6 +79,26 @@ impl Site {
 }
 
 /// A free `w × h` m map at 0.05 m with a wall of two cells around it.
+/// The polyline `pts` from arc length `s` on (its last point alone when `s` is past its end).
+pub(crate) fn after_arc(pts: &[Point2], s: f64) -> Vec<Point2> {
+    let mut run = 0.0;
+    for (k, w) in pts.windows(2).enumerate() {
+        let len = (w[1] - w[0]).norm();
+        if run + len >= s {
+            let f = if len > 0.0 {
+                ((s - run) / len).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let mut out = vec![w[0] + (w[1] - w[0]) * f];
+            out.extend_from_slice(&pts[k + 1..]);
+            return out;
+        }
+        run += len;
+    }
+    pts.last().map(|q| vec![*q]).unwrap_or_default()
+}
+
 pub(crate) fn walled(w: f64, h: f64) -> OccupancyGrid {
     let g = GridGeometry::new(
         (w / 0.05).round() as usize,
@@ -304,6 +324,7 @@ fn apply_splices() {
         cost_before: 0.0,
         cost_after: 0.0,
         skipped: Vec::new(),
+        escape: None,
     };
     let out = apply(&path, &r);
     assert_eq!(out.len(), 2 + 3 + 2);
@@ -438,6 +459,7 @@ fn worth_publishing_boundary() {
         cost_before: 0.0,
         cost_after: 0.0,
         skipped: Vec::new(),
+        escape: None,
     };
     // The patches' clearances are what the rule measures.
     for c in [0.29, 0.305, 0.309, 0.311, 0.32, 0.5] {
