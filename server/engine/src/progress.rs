@@ -1,8 +1,9 @@
 //! How far a robot is along its plan, from its odometry alone.
 //!
-//! Normal driving: among the next `window` waypoints after the last one reached, those within `tolerance_m` of
-//! the pose on the first pass of the path by it (a path that passes the same place twice is followed in order),
-//! and of them the nearest. Where several of that pass are equally near (a lane's end and the next lane, closer
+//! Normal driving: among the path's segments from the last waypoint reached on (the next `window`), those within
+//! `tolerance_m` of the pose on the first pass of the path by it (a path that passes the same place twice is
+//! followed in order), and of them the nearest; the waypoint reached is that segment's end when it is the
+//! nearer end and lies within the tolerance, else its start. Where several of that pass are equally near (a lane's end and the next lane, closer
 //! than the tolerance), the one whose path direction agrees with the robot's heading wins.
 //!
 //! Re-acquisition: a robot that joins late, was carried, relocalised or drove on while the daemon restarted is
@@ -204,6 +205,30 @@ impl Assignment {
         if agree.is_empty() { candidates } else { agree }
     }
 
+    /// How near `(x, y)` is to the path's segment from waypoint `i` (waypoint `i` alone when it is the last
+    /// before `end`, the searched window's end), and the
+    /// waypoint it has reached there: the segment's end when that is the nearer end and within `tol` (a
+    /// waypoint within the tolerance is reached), else its start. Segments, not waypoints: a detour's few waypoints lie metres
+    /// apart, and a robot between two of them is on its path, not near another pass of it.
+    fn by_segment(&self, i: usize, end: usize, x: f64, y: f64, tol: f64) -> (usize, f64) {
+        let w = &self.doc.waypoints;
+        let a = (w[i].x, w[i].y);
+        let Some(b) = w[..end].get(i + 1).map(|b| (b.x, b.y)) else {
+            return (i, (a.0 - x).hypot(a.1 - y));
+        };
+        let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+        let len2 = dx * dx + dy * dy;
+        let t = if len2 > 0.0 {
+            (((x - a.0) * dx + (y - a.1) * dy) / len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let d = (a.0 + t * dx - x).hypot(a.1 + t * dy - y);
+        let (da, db) = ((a.0 - x).hypot(a.1 - y), (b.0 - x).hypot(b.1 - y));
+        let reached = if db < da && db <= tol { i + 1 } else { i };
+        (reached, d)
+    }
+
     /// Of `candidates` (index ascending, each within `tol` of one pose), those of the first pass of the path
     /// by the pose: a later pass starts where the path between two candidates is longer than `2 tol`, i.e. it
     /// left the pose's neighbourhood and came back. A plan that passes a place twice is driven in order, so a
@@ -232,7 +257,7 @@ impl Assignment {
         let w = &self.doc.waypoints;
         let end = self.index.saturating_add(params.window).saturating_add(1).min(w.len());
         let local: Vec<(usize, f64)> = (self.index..end)
-            .map(|i| (i, (w[i].x - x).hypot(w[i].y - y)))
+            .map(|i| self.by_segment(i, end, x, y, tol))
             .filter(|&(_, d)| d <= tol)
             .collect();
         if self.await_start {

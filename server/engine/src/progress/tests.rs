@@ -178,6 +178,33 @@ fn a_robot_turning_at_its_dock_stays_on_the_first_pass_though_a_later_lane_passe
 }
 
 #[test]
+fn a_robot_between_two_waypoints_of_a_detour_is_on_it_not_on_a_lane_that_runs_by_later() {
+    // A detour's long straight piece (two waypoints 4 m apart), round, and later a lane the same way along
+    // y = 0.3 with waypoints every 0.1 m.
+    let mut pts = vec![(0.0, 0.0), (4.0, 0.0), (4.0, 2.0), (0.0, 2.0)];
+    pts.extend((0..=40).map(|i| (i as f64 * 0.1, 0.3)));
+    let p = ProgressParams {
+        tolerance_m: 0.5,
+        window: 400,
+        back_confirm: 3,
+    };
+    let mut a = Assignment::new("p-1".into(), doc(&pts));
+    // Up to the tolerance before the detour's end.
+    for k in 1..=34 {
+        a.advance(k as f64 * 0.1, 0.02, Some(0.0), &p);
+        assert_eq!(
+            a.index,
+            0,
+            "at x = {:.1} on the detour progress went to {}",
+            k as f64 * 0.1,
+            a.index
+        );
+    }
+    a.advance(3.95, 0.0, Some(0.0), &p);
+    assert_eq!(a.index, 1, "the detour's end reached");
+}
+
+#[test]
 fn a_robot_first_seen_far_along_its_plan_is_found_there() {
     let pts = crossing_path();
     let p = ProgressParams {
