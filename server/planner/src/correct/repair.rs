@@ -29,11 +29,10 @@ const SKIP_MAX_CELLS: usize = 250_000;
 /// before `breach.earliest`.
 ///
 /// Fails on invalid params, an unusable path (fewer than two points, a non-finite point, zero length) or
-/// breach, an inconsistent world, or a start anchor that is itself in collision; never returns a colliding
-/// patch.
-///
-/// A start anchor closer than the radius to live obstacles only (the robot saw something late and is already
-/// inside the band) gets an escape instead of the error when one exists ([`super::Escape`]).
+/// breach, an inconsistent world, or a start anchor that is itself in collision; never returns a patch that
+/// comes closer than the radius, with one exception: a start anchor closer than the radius to live obstacles
+/// only (the robot saw something late and is already inside the band) gets an escape instead of the error when
+/// one exists ([`super::Escape`]: never closer than the anchor is, the radius back within a short way).
 pub fn repair(path: &[Point2], breach: &Breach, world: &World<'_>, p: &CorrectParams) -> Result<Repair, CorrectError> {
     match repair_keeping(path, breach, world, p) {
         Err(CorrectError::AnchorInCollision { x, y, clearance_m }) => EscapeCase::new(world, p, Point2::new(x, y))
