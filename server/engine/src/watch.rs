@@ -450,4 +450,36 @@ mod tests {
         let behind = post(0.6, 2.0);
         assert_eq!(run_check(&job(doc, 2.5), Some(at_origin(&behind))), CheckOutcome::Clear);
     }
+    #[test]
+    fn a_robot_already_inside_a_late_shelfs_band_on_a_lane_that_leads_out_is_still_corrected_for_a_post_ahead() {
+        // A shelf edge 0.14 m beside the lane (the radius is 0.15) ending level with the robot at x = 1.35: the
+        // lane leads out of its band by itself. A post on the lane 2 m on.
+        let shelf: Vec<Point3> = (0..8)
+            .map(|i| Point3::new((1.0 + 0.05 * f64::from(i)) as f32, 2.14, 0.0))
+            .collect();
+        let mut both = shelf.clone();
+        both.extend(post(3.3, 2.0).flatten());
+        let tree = |pts: &[Point3]| {
+            let mut t = IkdTree::new(IkdParams::default()).expect("params");
+            t.build(pts);
+            t
+        };
+        let (shelf, both) = (tree(&shelf), tree(&both));
+        let j = job(lane(), 1.3);
+        assert_eq!(
+            run_check(&j, Some(at_origin(&shelf))),
+            CheckOutcome::Clear,
+            "the lane leads out of the shelf's band: no version for it"
+        );
+        let CheckOutcome::Correct(p) = run_check(&j, Some(at_origin(&both))) else {
+            panic!("the post further on must not hide behind the shelf's stretch");
+        };
+        assert_eq!(p.reason, CorrectionReason::Obstacle);
+        let first = &p.waypoints[0];
+        assert!(
+            first.x > 1.5 && first.x < 3.1,
+            "the patch is the post's: starts at x = {}",
+            first.x
+        );
+    }
 }
