@@ -16,6 +16,7 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
+use shift_planner::geom::{Point2, point_segment_distance};
 use shift_proto::PlanDocument;
 
 /// Tolerances of progress tracking.
@@ -212,19 +213,12 @@ impl Assignment {
     /// apart, and a robot between two of them is on its path, not near another pass of it.
     fn by_segment(&self, i: usize, end: usize, x: f64, y: f64, tol: f64) -> (usize, f64) {
         let w = &self.doc.waypoints;
-        let a = (w[i].x, w[i].y);
-        let Some(b) = w[..end].get(i + 1).map(|b| (b.x, b.y)) else {
-            return (i, (a.0 - x).hypot(a.1 - y));
+        let (here, a) = (Point2::new(x, y), Point2::new(w[i].x, w[i].y));
+        let Some(b) = w[..end].get(i + 1).map(|b| Point2::new(b.x, b.y)) else {
+            return (i, (a - here).norm());
         };
-        let (dx, dy) = (b.0 - a.0, b.1 - a.1);
-        let len2 = dx * dx + dy * dy;
-        let t = if len2 > 0.0 {
-            (((x - a.0) * dx + (y - a.1) * dy) / len2).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        let d = (a.0 + t * dx - x).hypot(a.1 + t * dy - y);
-        let (da, db) = ((a.0 - x).hypot(a.1 - y), (b.0 - x).hypot(b.1 - y));
+        let d = point_segment_distance(here, a, b);
+        let (da, db) = ((a - here).norm(), (b - here).norm());
         let reached = if db < da && db <= tol { i + 1 } else { i };
         (reached, d)
     }

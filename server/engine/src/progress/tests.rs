@@ -105,9 +105,8 @@ fn crossing_path() -> Vec<(f64, f64)> {
 fn at_a_self_crossing_the_heading_keeps_the_branch_being_driven() {
     let pts = crossing_path();
     let p = ProgressParams {
-        tolerance_m: 0.5,
         window: 400,
-        back_confirm: 3,
+        ..ProgressParams::default()
     };
     // Driving east through the crossing: both branches are in the window; progress stays on the east branch.
     let mut a = Assignment::new("p-1".into(), doc(&pts));
@@ -146,9 +145,8 @@ fn a_robot_turning_at_its_dock_stays_on_the_first_pass_though_a_later_lane_passe
     pts.extend((1..=48).map(|i| (5.0 - i as f64 * 0.1, -2.0)));
     pts.extend((1..=50).map(|i| (0.2, -2.0 + i as f64 * 0.1)));
     let p = ProgressParams {
-        tolerance_m: 0.5,
         window: 400,
-        back_confirm: 3,
+        ..ProgressParams::default()
     };
     let mut a = Assignment::new("p-1".into(), doc(&pts));
     // Still facing north while it turns on the spot towards the first lane: the later lane agrees with its
@@ -184,9 +182,8 @@ fn a_robot_between_two_waypoints_of_a_detour_is_on_it_not_on_a_lane_that_runs_by
     let mut pts = vec![(0.0, 0.0), (4.0, 0.0), (4.0, 2.0), (0.0, 2.0)];
     pts.extend((0..=40).map(|i| (i as f64 * 0.1, 0.3)));
     let p = ProgressParams {
-        tolerance_m: 0.5,
         window: 400,
-        back_confirm: 3,
+        ..ProgressParams::default()
     };
     let mut a = Assignment::new("p-1".into(), doc(&pts));
     // Up to the tolerance before the detour's end.
