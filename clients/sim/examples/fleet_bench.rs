@@ -35,6 +35,7 @@ use shift_client::Client;
 use shift_planner::geom::Point2;
 use shift_planner::map::OccupancyGrid;
 use shift_proto::keys::{KeySpace, Ros2Mapping};
+use shift_proto::mission::{MissionRequest, MissionRobot, MissionStatus};
 use shift_sim::sim::SimConfig;
 use shift_sim::world::World;
 use shift_sim::{Report, RunOptions};
@@ -75,6 +76,11 @@ struct Args {
     /// (`PATH.30.json`).
     #[arg(long)]
     report: Option<PathBuf>,
+    /// Divides the site among the robots with one mission (`POST /v1/missions`, then assign), as a fleet
+    /// backend would, instead of giving each robot a grid cell as its region and planning it alone. The
+    /// robots wait for the plans assigned to their ids; the simulated time includes the mission's planning.
+    #[arg(long)]
+    mission: bool,
 }
 
 fn warehouse() -> PathBuf {
@@ -118,8 +124,9 @@ fn pick(
     }
 }
 
-/// The world file of `n` robots: one grid cell each (its region), a hidden box in each, a walker per five.
-fn world(n: usize, seed: u64, map: &OccupancyGrid) -> Result<Value> {
+/// The world file of `n` robots: one grid cell each (its region, unless `regions` is false), a hidden box in
+/// each, a walker per five.
+fn world(n: usize, seed: u64, map: &OccupancyGrid, regions: bool) -> Result<Value> {
     let g = map.geometry;
     let (w, h) = (g.width as f64 * g.resolution, g.height as f64 * g.resolution);
     let cols = ((n as f64 * w / h).sqrt().ceil() as usize).max(1);
@@ -150,14 +157,68 @@ fn world(n: usize, seed: u64, map: &OccupancyGrid) -> Result<Value> {
         {
             movers.push(json!({"r": 0.2, "from": [a.x, a.y], "to": [b.x, b.y], "speed": 0.3}));
         }
-        robots.push(json!({
+        let mut robot = json!({
             "id": format!("r{i:02}"), "start": [start.x, start.y, 0.0], "radius": RADIUS_M, "tool_width": TOOL_M,
             "v_max": V_MAX,
-            "region": [[cell[0], cell[1]], [cell[2], cell[1]], [cell[2], cell[3]], [cell[0], cell[3]]],
-        }));
+        });
+        if regions {
+            robot["region"] = json!([
+                [cell[0], cell[1]],
+                [cell[2], cell[1]],
+                [cell[2], cell[3]],
+                [cell[0], cell[3]]
+            ]);
+        }
+        robots.push(robot);
     }
     Ok(json!({"map": warehouse().join("map.yaml"), "obstacles": obstacles, "movers": movers, "robots": robots}))
 }
+
+/// One mission over the site for the world's robots (each from its start, with its body and tool), planned and
+/// assigned; errors when the mission fails or takes longer than [`MISSION_TIMEOUT`].
+async fn divide(client: &Client, world: &Value) -> Result<()> {
+    let robots = world["robots"]
+        .as_array()
+        .context("the world's robots")?
+        .iter()
+        .map(|r| {
+            let id = r["id"].as_str().context("a robot's id")?;
+            let start = [r["start"][0].as_f64(), r["start"][1].as_f64()];
+            let [Some(x), Some(y)] = start else {
+                bail!("robot {id}: its start");
+            };
+            let mut robot = MissionRobot::new(id, [x, y], RADIUS_M, TOOL_M);
+            robot.v_max = V_MAX;
+            Ok(robot)
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let accepted = client
+        .create_mission(&MissionRequest {
+            site: "wh".into(),
+            robots,
+            attribute: None,
+            options: None,
+            objective: None,
+        })
+        .await?;
+    let id = accepted.mission_id;
+    let deadline = Instant::now() + MISSION_TIMEOUT;
+    loop {
+        let view = client.mission(&id).await?;
+        match view.status {
+            MissionStatus::Ready => break,
+            MissionStatus::Queued | MissionStatus::Planning if Instant::now() < deadline => {
+                tokio::time::sleep(Duration::from_millis(100)).await;
+            }
+            other => bail!("mission {id} is {other:?}: {:?} {:?}", view.error, view.warnings),
+        }
+    }
+    client.assign_mission(&id).await?;
+    Ok(())
+}
+
+/// How long a mission may take to plan.
+const MISSION_TIMEOUT: Duration = Duration::from_secs(300);
 
 /// The daemon as a child process on loopback.
 struct Daemon {
@@ -331,7 +392,8 @@ async fn run_fleet(args: &Args, bin: &Path, n: usize) -> Result<RunFigures> {
     std::fs::write(&probe_path, serde_json::to_vec(&probe)?)?;
     let map = World::load(&probe_path)?.static_grid();
     let world_path = dir.path().join("world.json");
-    std::fs::write(&world_path, serde_json::to_vec_pretty(&world(n, args.seed, &map)?)?)?;
+    let world_doc = world(n, args.seed, &map, !args.mission)?;
+    std::fs::write(&world_path, serde_json::to_vec_pretty(&world_doc)?)?;
 
     let http = reqwest::Client::new();
     let before = Scrape::fetch(&http, &daemon.base).await?;
@@ -347,14 +409,25 @@ async fn run_fleet(args: &Args, bin: &Path, n: usize) -> Result<RunFigures> {
         site: "wh".into(),
         world: world_path,
         robots: Some(n),
-        plan_per_robot: true,
+        plan_per_robot: !args.mission,
         speedup: args.speedup,
         seed: args.seed,
         timeout_s: args.sim_s,
         trace: None,
         sim: SimConfig::default(),
     };
-    let report = shift_sim::run(&opts).await?;
+    let report = if args.mission {
+        let sim = tokio::spawn(async move { shift_sim::run(&opts).await });
+        let planned = Instant::now();
+        divide(&client, &world_doc).await?;
+        eprintln!(
+            "mission of {n} robots planned and assigned in {:.1} s",
+            planned.elapsed().as_secs_f64()
+        );
+        sim.await??
+    } else {
+        shift_sim::run(&opts).await?
+    };
     stop.notify_one();
     let _ = watcher.await;
     let after = Scrape::fetch(&http, &daemon.base).await?;
@@ -457,6 +530,10 @@ fn print(f: &RunFigures, args: &Args) {
     println!(
         "| fleet covered / collisions / corrections applied / safety stops | {:.1} % / {} / {corrections} / {stops} | |",
         f.report.fleet.covered_pct, f.report.fleet.collisions
+    );
+    println!(
+        "| coverable from each robot's start without leaving its region (the most its plans can sweep) | {:.1} % | |",
+        f.report.fleet.within_regions_pct
     );
     let line = json!({
         "robots": f.n, "speedup": args.speedup, "traffic": t, "drops": f.drops.iter().map(|(k, v)| json!({k.to_string(): v})).collect::<Vec<_>>(),

@@ -49,12 +49,20 @@ pub struct RobotReport {
 pub struct FleetReport {
     /// Union of swept cells over union of coverable cells, percent.
     pub covered_pct: f64,
+    /// The most the plans can cover when each robot keeps inside its region, percent of the same coverable
+    /// cells (100 without regions; see [`crate::measure::Coverage::fleet_within_regions`]).
+    #[serde(default = "hundred")]
+    pub within_regions_pct: f64,
     /// Simulated time until the last robot finished (or the run ended), seconds.
     pub time_s: f64,
     /// Contacts with the static world, all robots.
     pub collisions: u64,
     /// Simulated seconds per wall-clock second achieved.
     pub speedup_achieved: f64,
+}
+
+fn hundred() -> f64 {
+    100.0
 }
 
 /// The report.
@@ -145,6 +153,7 @@ impl Report {
             .collect();
         let fleet = FleetReport {
             covered_pct: coverage.fleet,
+            within_regions_pct: coverage.fleet_within_regions,
             time_s: robots.iter().map(|r| r.time_s).fold(0.0, f64::max),
             collisions: robots.iter().map(|r| r.collisions).sum(),
             speedup_achieved: if wall_s > 0.0 { t / wall_s } else { 0.0 },

@@ -48,6 +48,14 @@ pub fn polyline_length(points: &[Point2]) -> f64 {
     points.windows(2).map(|w| (w[1] - w[0]).norm()).sum()
 }
 
+/// Length of the shortest 8-connected way from `a` to `b` on an open grid, metres (straight runs and
+/// diagonals: `max(|dx|, |dy|) + (√2 − 1) · min(|dx|, |dy|)`); at most 8.3 % more than the straight length.
+/// A grid search's cost without obstacles, against which a bound on its cost is set.
+pub fn octile_length(a: Point2, b: Point2) -> f64 {
+    let (dx, dy) = ((b.x - a.x).abs(), (b.y - a.y).abs());
+    dx.max(dy) + (std::f64::consts::SQRT_2 - 1.0) * dx.min(dy)
+}
+
 /// Unit direction of angle `theta_rad` (radians, counter-clockwise from +x).
 pub fn direction(theta_rad: f64) -> Vector2 {
     Vector2::new(theta_rad.cos(), theta_rad.sin())
@@ -133,5 +141,62 @@ mod tests {
         assert!(
             (heading_change(a, direction(-std::f64::consts::FRAC_PI_2)) - std::f64::consts::FRAC_PI_2).abs() < 1e-12
         );
+    }
+
+    /// Shortest 8-connected way between two cells of an open 12 × 12 grid, by Dijkstra (the oracle).
+    fn grid_way(a: (usize, usize), b: (usize, usize)) -> f64 {
+        const N: usize = 12;
+        let mut dist = [f64::INFINITY; N * N];
+        let mut done = [false; N * N];
+        dist[a.1 * N + a.0] = 0.0;
+        for _ in 0..N * N {
+            let Some(u) = (0..N * N)
+                .filter(|&i| !done[i])
+                .min_by(|&i, &j| dist[i].total_cmp(&dist[j]))
+            else {
+                break;
+            };
+            done[u] = true;
+            let (ux, uy) = ((u % N) as i64, (u / N) as i64);
+            for (dx, dy) in [
+                (-1i64, -1i64),
+                (-1, 0),
+                (-1, 1),
+                (0, -1),
+                (0, 1),
+                (1, -1),
+                (1, 0),
+                (1, 1),
+            ] {
+                let (vx, vy) = (ux + dx, uy + dy);
+                if (0..N as i64).contains(&vx) && (0..N as i64).contains(&vy) {
+                    let v = vy as usize * N + vx as usize;
+                    let step = if dx != 0 && dy != 0 {
+                        std::f64::consts::SQRT_2
+                    } else {
+                        1.0
+                    };
+                    dist[v] = dist[v].min(dist[u] + step);
+                }
+            }
+        }
+        dist[b.1 * N + b.0]
+    }
+
+    #[test]
+    fn octile_length_is_the_open_grids_shortest_way() {
+        for (a, b) in [
+            ((0, 0), (11, 4)),
+            ((3, 9), (3, 2)),
+            ((5, 5), (5, 5)),
+            ((11, 0), (0, 11)),
+            ((2, 7), (9, 1)),
+        ] {
+            let p = |(x, y): (usize, usize)| Point2::new(x as f64, y as f64);
+            let octile = octile_length(p(a), p(b));
+            assert!((octile - grid_way(a, b)).abs() < 1e-9, "{a:?} → {b:?}");
+            let straight = (p(b) - p(a)).norm();
+            assert!(straight <= octile + 1e-12 && octile <= 1.0824 * straight + 1e-12);
+        }
     }
 }
