@@ -313,9 +313,10 @@ impl LiveMap {
         removed
     }
 
-    /// The points, for distance queries (IKD-SWOpt, the occupancy overlay, the API).
+    /// The points, for distance queries (IKD-SWOpt, the occupancy overlay, the API), each standing for its
+    /// voxel (see [`LivePoints::voxels`]).
     pub fn points(&self) -> LivePoints<'_> {
-        LivePoints::new(&self.tree, self.origin)
+        LivePoints::voxels(&self.tree, self.origin)
     }
 
     /// Points held.
@@ -441,9 +442,17 @@ mod tests {
         assert_eq!(m.ingest(&[p], Heights::MapFrame, 0).inserted, 1);
         let got = m.points().all();
         assert!((got[0] - Point2::new(p[0], p[1])).norm() < 1e-3, "{got:?} for {p:?}");
-        let (near, d) = m.points().nearest(Point2::new(p[0] + 0.3, p[1])).expect("a point");
+        let q = Point2::new(p[0] + 0.3, p[1]);
+        let (near, d) = LivePoints::new(&m.tree, m.origin).nearest(q).expect("a point");
         assert!(
             (d - 0.3).abs() < 1e-3 && (near.x - p[0]).abs() < 1e-3,
+            "{near:?} at {d}"
+        );
+        // Read as voxels (what corrections read), the distance is to the point's 5 cm square: 40.012 lies in
+        // [40.00, 40.05], so the square's near edge is 0.262 m away.
+        let (near, d) = m.points().nearest(q).expect("a point");
+        assert!(
+            (d - 0.262).abs() < 1e-3 && (near.x - (x0 + 40.05)).abs() < 1e-3,
             "{near:?} at {d}"
         );
         // Outside the site box: refused, wherever it is.

@@ -12,6 +12,9 @@
 //! it scans the query's own bucket, then the bucket rows outward from its own, each row over the buckets
 //! that the circle of the best distance so far spans: points sorted row-major make that span one contiguous
 //! slice. A row whose band lies at least the best distance away ends the scan in its direction.
+//!
+//! Live points read as voxels ([`crate::map::LivePoints::voxels`]) are held as their squares' lower corners,
+//! and distances go to the squares; every bound above is widened by the square's diagonal.
 
 use crate::geom::Point2;
 
@@ -42,6 +45,10 @@ pub(crate) struct LocalObstacles<'a, 'w> {
     /// `pts[start[y·nx + x0]..start[y·nx + x1 + 1]]`.
     start: Vec<u32>,
     pts: Vec<Point2>,
+    /// Side of the square each of `pts` is the lower corner of, metres (0: points).
+    voxel: f64,
+    /// How much nearer than its corner a square can come: its diagonal.
+    reach: f64,
     /// Summed-area table of the bucket counts: `sat[y·(nx+1) + x]` points lie in buckets [0, x) × [0, y).
     sat: Vec<u32>,
     radius: f64,
@@ -73,10 +80,15 @@ impl<'a, 'w> LocalObstacles<'a, 'w> {
         let nx = ((ex / bucket).ceil() as usize).max(1);
         let ny = ((ey / bucket).ceil() as usize).max(1);
         let mut raw: Vec<Point2> = Vec::new();
+        let (voxel, reach) = world.live.map_or((0.0, 0.0), |l| (l.voxel_m.max(0.0), l.reach_m()));
         if ok && let Some(live) = world.live {
-            // Points outside the buckets' extent are at least `radius` from every query the buckets answer,
+            // Areas outside the buckets' extent are at least `radius` from every query the buckets answer,
             // and the clamping of `key` puts them in an edge bucket.
-            raw = live.within(origin, top);
+            let grow = Point2::new(reach, reach);
+            raw = live.within(origin - grow.coords, top + grow.coords);
+            for q in &mut raw {
+                *q = live.voxel_corner_map(*q);
+            }
         }
         let mut me = Self {
             world,
@@ -97,6 +109,8 @@ impl<'a, 'w> LocalObstacles<'a, 'w> {
             start: Vec::new(),
             pts: Vec::new(),
             sat: Vec::new(),
+            voxel,
+            reach,
             radius,
             band: std::f64::consts::SQRT_2 * world.resolution(),
         };
@@ -158,10 +172,12 @@ impl<'a, 'w> LocalObstacles<'a, 'w> {
     fn scan(&self, y: usize, x0: usize, x1: usize, p: Point2, best: &mut (Point2, f64), found: &mut bool) {
         let row = y * self.nx;
         let (s, e) = (self.start[row + x0] as usize, self.start[row + x1 + 1] as usize);
+        let v = self.voxel;
         for q in &self.pts[s..e] {
-            let d2 = (q - p).norm_squared();
+            let on = Point2::new(p.x.clamp(q.x, q.x + v), p.y.clamp(q.y, q.y + v));
+            let d2 = (on - p).norm_squared();
             if d2 < best.1 {
-                *best = (*q, d2);
+                *best = (on, d2);
                 *found = true;
             }
         }
@@ -171,14 +187,15 @@ impl<'a, 'w> LocalObstacles<'a, 'w> {
     /// from `p` (0 for the query's own row).
     #[inline]
     fn scan_row(&self, y: usize, gap: f64, p: Point2, best: &mut (Point2, f64), found: &mut bool) {
-        // Every point of the row nearer than the best has |x − p.x| < √(best − gap²).
-        let half = (best.1 - gap * gap).max(0.0).sqrt() + SLACK_M;
+        // Every corner of the row whose square is nearer than the best has |x − p.x| < √(best − gap²) + reach
+        // (the callers' gap is already less the reach).
+        let half = (best.1 - gap * gap).max(0.0).sqrt() + SLACK_M + self.reach;
         self.scan(y, self.col(p.x - half), self.col(p.x + half), p, best, found);
     }
 
     /// The nearest live point within the radius (see the module docs), with its distance.
     fn live_within(&self, p: Point2) -> Option<(Point2, f64)> {
-        let r = self.radius + SLACK_M;
+        let r = self.radius + SLACK_M + self.reach;
         let (x0, x1) = (self.col(p.x - r), self.col(p.x + r));
         let (y0, y1) = (self.row(p.y - r), self.row(p.y + r));
         if self.count(x0, x1, y0, y1) == 0 {
@@ -197,7 +214,7 @@ impl<'a, 'w> LocalObstacles<'a, 'w> {
             if up {
                 let y = cy + k;
                 // The band of row y starts at oy + y·b, above p.
-                let gap = (oy + y as f64 * b - p.y - SLACK_M).max(0.0);
+                let gap = (oy + y as f64 * b - p.y - SLACK_M - self.reach).max(0.0);
                 if y > y1 || gap * gap >= best.1 {
                     up = false;
                 } else {
@@ -210,7 +227,7 @@ impl<'a, 'w> LocalObstacles<'a, 'w> {
                 } else {
                     let y = cy - k;
                     // The band of row y ends at oy + (y + 1)·b, below p.
-                    let gap = (p.y - (oy + (y + 1) as f64 * b) - SLACK_M).max(0.0);
+                    let gap = (p.y - (oy + (y + 1) as f64 * b) - SLACK_M - self.reach).max(0.0);
                     if y < y0 || gap * gap >= best.1 {
                         down = false;
                     } else {
@@ -363,6 +380,66 @@ mod tests {
                 let p = Point2::new(rng.random_range(lo.x..=hi.x), rng.random_range(lo.y..=hi.y));
                 let want = brute(&site, p).filter(|&d| d < radius);
                 assert_eq!(local.live_within(p).map(|(_, d)| d), want, "at {p:?}, radius {radius}");
+            }
+        }
+    }
+
+    /// The nearest voxel square of `p` by brute force (squares of the tree's voxel size on its points).
+    fn brute_squares(site: &Site, p: Point2) -> Option<f64> {
+        let v = f64::from(site.tree.params().voxel_size);
+        site.live
+            .iter()
+            .map(|q| {
+                let (x0, y0) = ((q.x / v).floor() * v, (q.y / v).floor() * v);
+                (Point2::new(p.x.clamp(x0, x0 + v), p.y.clamp(y0, y0 + v)) - p).norm()
+            })
+            .min_by(f64::total_cmp)
+    }
+
+    /// Read as voxels, the cache measures to the squares: equal to brute force within the radius, never above
+    /// the distance to the point itself, and the same answer as the world's tree query.
+    #[test]
+    fn read_as_voxels_matches_brute_force_over_the_squares() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(0x5a1e);
+        for _ in 0..10 {
+            let mut live = Vec::new();
+            for _ in 0..rng.random_range(1..4) {
+                let c = Point2::new(rng.random_range(1.0..9.0), rng.random_range(1.0..7.0));
+                let spread = rng.random_range(0.01..1.0);
+                for _ in 0..rng.random_range(1..200) {
+                    let (a, r) = (
+                        rng.random_range(0.0..std::f64::consts::TAU),
+                        spread * rng.random::<f64>().sqrt(),
+                    );
+                    live.push(c + nalgebra::Vector2::new(r * a.cos(), r * a.sin()));
+                }
+            }
+            let site = Site::new(walled(10.0, 8.0), live);
+            let world = site.world_as_voxels();
+            let lo = Point2::new(rng.random_range(0.5..4.0), rng.random_range(0.5..3.0));
+            let hi = lo + nalgebra::Vector2::new(rng.random_range(0.0..5.0), rng.random_range(0.0..4.0));
+            let radius = rng.random_range(0.05..0.8);
+            let local = LocalObstacles::new(&world, lo, hi, radius);
+            for _ in 0..1000 {
+                let p = Point2::new(rng.random_range(lo.x..=hi.x), rng.random_range(lo.y..=hi.y));
+                let want = brute_squares(&site, p);
+                let got = local.live_within(p);
+                match (want.filter(|&d| d < radius), got) {
+                    (Some(w), Some((q, d))) => {
+                        assert!((w - d).abs() < 1e-9, "at {p:?}: brute {w}, cache {d}");
+                        assert!(((q - p).norm() - d).abs() < 1e-12);
+                    }
+                    (None, None) => {}
+                    (w, g) => panic!("at {p:?}, radius {radius}: brute {w:?}, cache {g:?}"),
+                }
+                let tree = world.nearest_live(p).map(|(_, d)| d);
+                assert!(
+                    (tree.expect("points") - want.expect("points")).abs() < 1e-9,
+                    "tree query at {p:?}"
+                );
+                let points = brute(&site, p).expect("points");
+                assert!(want.expect("points") <= points + 1e-12);
             }
         }
     }

@@ -43,6 +43,17 @@ impl Site {
         .expect("consistent")
     }
 
+    /// The world with each live point read as its voxel square (the tree's voxel size), as the live map reads
+    /// its downsampled points.
+    pub(crate) fn world_as_voxels(&self) -> World<'_> {
+        World::new(
+            &self.grid,
+            &self.field,
+            Some(LivePoints::voxels(&self.tree, Point2::origin())),
+        )
+        .expect("consistent")
+    }
+
     /// Brute-force smallest distance from the polyline (continuous segments) to any obstacle (static cells
     /// credited `STATIC_SLACK_M`, see below), and whether it stays on the map.
     pub(crate) fn oracle(&self, pts: &[Point2]) -> (f64, bool) {
