@@ -23,7 +23,13 @@
 //!   scene's map, the plan handed to it as the fleet would ([`SimRobot::on_message`]), stepped unpaced with the
 //!   default steps (0.05 s, laser at 10 Hz, its safety stop and detours on). The follower is seed 003's Alg. 2:
 //!   once within `mu` of its target the robot takes the next one; `mu = 0` is stop-and-go, braking to a stop on
-//!   every target point of the document (its waypoints, every tool_width / 4 or closer) and turning on the spot.
+//!   every target and turning on the spot. The targets are the paper's: its robot goes from grid cell to grid
+//!   cell, a robot diameter apart, so the document's waypoints (every tool_width / 4 or closer, for the speed
+//!   profile) are thinned to at most one per tool width (= the diameter here) where the path runs straight
+//!   (within [`CHORD_TOL_M`] of the line between two targets), keeping every corner, every change of waypoint
+//!   kind and the last one; a kept target carries the slowest speed of the stretch it ends
+//!   ([`paper_targets`]). Without that, stop-and-go
+//!   would brake for every 7.5 cm of a 0.3 m tool's lanes and measure the document's sampling, not the method.
 //! - Random walk: the planner's random-walk baseline (straight at a seeded random heading until the next step
 //!   would come closer than the robot radius to a wall, then a new seeded random heading), long enough to drive
 //!   for the time budget, driven by the same follower and cut at the **time the "S" shape run took in the same
@@ -53,7 +59,7 @@ use shift_planner::map::OccupancyGrid;
 use shift_planner::pipeline::{NoMonitor, PlanOutput, PlanParams, plan_shaped};
 use shift_planner::space::{CoverageSpace, RobotShape};
 use shift_planner::speed::{SpeedLimits, SpeedParams, SpeedProfile, profile_path};
-use shift_proto::PlanDocument;
+use shift_proto::{PlanDocument, WaypointDoc};
 use shift_sim::measure::measure;
 use shift_sim::robot::SimRobot;
 use shift_sim::sim::{SimConfig, Simulation};
@@ -63,6 +69,9 @@ use shiftd::scene_io::{LoadedScene, load_scene};
 
 /// The paper's w (relative) and our tool width for it, metres; the robot's radius is half the tool.
 const WIDTHS: [(u32, f64); 2] = [(3, 0.3), (5, 0.5)];
+/// How far the path between two of the paper's targets may stray from the straight line between them, metres
+/// (a straight stretch, not a curve round a wall; see [`paper_targets`]).
+const CHORD_TOL_M: f64 = 0.005;
 /// The following thresholds, metres (0: stop-and-go).
 const MUS: [f64; 3] = [0.0, 0.1, 0.2];
 /// A planned run that has not finished after this many times its profiled duration, plus [`TIMEOUT_EXTRA_S`],
@@ -292,12 +301,47 @@ fn baseline_plan(space: &CoverageSpace, which: Baseline, seed: u64, length_m: f6
 }
 
 fn planned(id: &str, space: &CoverageSpace, out: &PlanOutput, profile: &SpeedProfile) -> Planned {
+    let mut doc = shift_engine::to_document(&format!("p-{id}"), (space, out), profile, false, 0.0);
+    doc.waypoints = paper_targets(&doc.waypoints, space.robot.tool_width_m);
     Planned {
-        doc: shift_engine::to_document(&format!("p-{id}"), (space, out), profile, false, 0.0),
+        doc,
         strategy: format!("{}/{}", out.decomposition.name(), out.pattern.name()),
         coverage_pct: profile.metrics.coverage_pct,
         duration_s: profile.dwell.duration_s,
     }
+}
+
+/// The document's waypoints thinned to the paper's targets (see the module docs): from each kept target the
+/// next is the furthest waypoint within `spacing_m` of path such that the waypoints between stay within
+/// [`CHORD_TOL_M`] of the straight line to it and share its kind; the last one is kept. Each kept target
+/// carries the slowest speed since the previous one.
+fn paper_targets(wps: &[WaypointDoc], spacing_m: f64) -> Vec<WaypointDoc> {
+    let n = wps.len();
+    if n <= 2 {
+        return wps.to_vec();
+    }
+    let step = |i: usize| (wps[i].x - wps[i - 1].x).hypot(wps[i].y - wps[i - 1].y);
+    let chord_holds = |k: usize, j: usize| {
+        let (a, b) = (Point2::new(wps[k].x, wps[k].y), Point2::new(wps[j].x, wps[j].y));
+        (k + 1..j).all(|m| {
+            wps[m].kind == wps[j].kind
+                && shift_planner::geom::point_segment_distance(Point2::new(wps[m].x, wps[m].y), a, b) <= CHORD_TOL_M
+        })
+    };
+    let mut out = vec![wps[0]];
+    let mut k = 0;
+    while k + 1 < n {
+        let (mut j, mut run) = (k + 1, step(k + 1));
+        while j + 1 < n && run + step(j + 1) <= spacing_m + 1e-9 && chord_holds(k, j + 1) {
+            j += 1;
+            run += step(j);
+        }
+        let mut w = wps[j];
+        w.v = wps[k + 1..=j].iter().map(|w| w.v).fold(f64::INFINITY, f64::min);
+        out.push(w);
+        k = j;
+    }
+    out
 }
 
 /// The robot of a case, at the plan's start (the scene's dock), facing +x.
