@@ -133,7 +133,10 @@ pub fn judge(path: &[Point2], ahead_from: usize, robot: Point2, world: &World<'_
             // no breach; only new (live) obstacles must keep d_safe, and the static map only the clearance
             // the plan keeps from it (the radius; a footprint's inscribed radius).
             let (c_live, c_static) = if world.inside(q) {
-                (world.live_clearance(q), world.static_clearance_upto(q, d_safe))
+                (
+                    world.live_clearance_upto(q, d_safe),
+                    world.static_clearance_upto(q, d_safe),
+                )
             } else {
                 (0.0, 0.0)
             };

@@ -179,7 +179,7 @@ impl<'w> Repairer<'_, 'w> {
         let q = self.arc.point_at(s);
         let d = self.p.d_safe();
         self.world.inside(q)
-            && self.world.live_clearance(q) >= d
+            && self.world.live_clearance_upto(q, d) >= d
             && self.world.static_clearance_upto(q, d) >= self.p.robot_radius_m - STATIC_SLACK_M
     }
 

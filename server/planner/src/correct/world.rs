@@ -85,6 +85,15 @@ impl<'a> World<'a> {
         self.nearest_live(p).map_or(f64::INFINITY, |(_, d)| d)
     }
 
+    /// [`Self::live_clearance`] where it is below `upto`; otherwise some value ≥ `upto` that is never above
+    /// it (see [`LivePoints::nearest_upto`]).
+    #[inline]
+    pub fn live_clearance_upto(&self, p: Point2, upto: f64) -> f64 {
+        self.live
+            .and_then(|l| l.nearest_upto(p, upto))
+            .map_or(f64::INFINITY, |(_, d)| d)
+    }
+
     /// The nearest static site (non-free cell centre, or the border ring when the field has one) as the
     /// distance field sees it, with its distance (metres). Never nearer than the true nearest site.
     #[inline]
@@ -178,14 +187,16 @@ impl<'a> World<'a> {
     pub fn clearance_lower_bound(&self, p: Point2) -> f64 {
         let fast = self.nearest_static_fast(p).map_or(f64::INFINITY, |(_, d)| d);
         let band = std::f64::consts::SQRT_2 * self.resolution();
-        (fast - band).max(0.0).min(self.live_clearance(p))
+        // Any cheap lower bound will do for the live part too.
+        (fast - band).max(0.0).min(self.live_clearance_upto(p, 0.0))
     }
 
     /// Exact clearance of `p` (metres) whenever it is below `upto`: min of the exact static distance and the
     /// live distance. Values ≥ `upto` are only known to be ≥ `upto`.
     #[inline]
     pub fn clearance_upto(&self, p: Point2, upto: f64) -> f64 {
-        self.static_clearance_upto(p, upto).min(self.live_clearance(p))
+        self.static_clearance_upto(p, upto)
+            .min(self.live_clearance_upto(p, upto))
     }
 
     /// True when `p` is on the map, at least `radius_m` from every live obstacle point, and at least
@@ -193,7 +204,7 @@ impl<'a> World<'a> {
     #[inline]
     pub fn clear_of(&self, p: Point2, radius_m: f64) -> bool {
         self.inside(p)
-            && self.live_clearance(p) >= radius_m
+            && self.live_clearance_upto(p, radius_m) >= radius_m
             && self.static_clearance_upto(p, radius_m) >= radius_m - STATIC_SLACK_M
     }
 }

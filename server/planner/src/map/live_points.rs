@@ -69,11 +69,23 @@ impl<'a> LivePoints<'a> {
     /// one).
     #[inline]
     pub fn nearest(&self, p: Point2) -> Option<(Point2, f64)> {
+        self.nearest_upto(p, f64::INFINITY)
+    }
+
+    /// [`Self::nearest`] where the distance is below `upto`; otherwise a distance that is at least `upto` and
+    /// never above the true one (read as voxels, the nearest point's distance less a voxel diagonal, with that
+    /// point's square's nearest point), which spares the search of the squares round it.
+    #[inline]
+    pub fn nearest_upto(&self, p: Point2, upto: f64) -> Option<(Point2, f64)> {
         let local = Self::to_local(self.origin, p);
         let (q, _) = self.tree.nearest_point(&local)?;
         if self.voxel_m <= 0.0 {
             let q = self.to_map(&q);
             return Some((q, (q - p).norm()));
+        }
+        let bound = (self.to_map(&q) - p).norm() - self.reach_m();
+        if bound >= upto {
+            return Some((self.nearest_on(&q, p), bound));
         }
         let first = self.nearest_on(&q, p);
         let d0 = (first - p).norm();
@@ -237,6 +249,15 @@ mod tests {
                 // f32 storage rounds a return by up to ~0.1 mm at these magnitudes' local offsets.
                 let nearest_return = raw.iter().map(|r| (r - p).norm()).fold(f64::INFINITY, f64::min);
                 proptest::prop_assert!(d <= nearest_return + 1e-5, "{} above a return at {}", d, nearest_return);
+                // Capped: exact below the cap, else at least the cap and never above the truth.
+                for upto in [0.0, 0.05, 0.3, 1.0] {
+                    let (_, c) = live.nearest_upto(p, upto).expect("points");
+                    if want < upto - 1e-6 {
+                        proptest::prop_assert!((c - want).abs() < 1e-6, "capped at {}: {} against {}", upto, c, want);
+                    } else {
+                        proptest::prop_assert!(c >= upto - 1e-6 && c <= want + 1e-6, "capped at {}: {} against {}", upto, c, want);
+                    }
+                }
             }
         }
     }
