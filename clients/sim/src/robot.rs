@@ -324,13 +324,11 @@ impl SimRobot {
         self.seen
             .iter()
             .map(|p| {
-                let known = (-1..=1).any(|dy| {
-                    (-1..=1).any(|dx| {
-                        let q = Point2::new(p.x + f64::from(dx) * g.resolution, p.y + f64::from(dy) * g.resolution);
-                        g.locate(q).is_none_or(|c| !map.is_free(g.index(c)))
-                    })
-                });
-                base - if known { GRAZE_KNOWN_M } else { GRAZE_M }
+                base - if crate::sight::near_known(map, *p) {
+                    GRAZE_KNOWN_M
+                } else {
+                    GRAZE_M
+                }
             })
             .collect()
     }

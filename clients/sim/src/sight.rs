@@ -52,7 +52,7 @@ pub fn news_on_path(
 }
 
 /// True when `p` falls on or next to a cell the map does not call free (or off the map).
-fn near_known(map: &OccupancyGrid, p: Point2) -> bool {
+pub fn near_known(map: &OccupancyGrid, p: Point2) -> bool {
     let g = map.geometry;
     (-1..=1).any(|dy| {
         (-1..=1).any(|dx| {
