@@ -139,8 +139,7 @@ pub struct SimRobot {
     pub swept: CoverageRaster,
     /// Its last scan's returns in the map frame.
     seen: Vec<Point2>,
-    /// The radius of the safety field round each of `seen` (see [`Self::fields`]); empty until the first step
-    /// after a scan.
+    /// The radius of the safety field round each of `seen` (see [`Self::fields`]).
     fields: Vec<f64>,
     blocked: bool,
     /// The yaw-rate command its last clear check assumed while braking.
@@ -275,14 +274,15 @@ impl SimRobot {
         })
     }
 
-    /// Keeps a scan's returns (robot-frame points) in the map frame for the safety stop.
-    pub fn observe(&mut self, points: &[(f64, f64)]) {
+    /// Keeps a scan's returns (robot-frame points) in the map frame for the safety stop, each with its field
+    /// on the robot's `map` (see [`Self::fields`]).
+    pub fn observe(&mut self, points: &[(f64, f64)], map: &OccupancyGrid) {
         let (c, s) = (self.body.yaw.cos(), self.body.yaw.sin());
-        self.fields.clear();
         self.seen = points
             .iter()
             .map(|&(x, y)| Point2::new(self.body.x + c * x - s * y, self.body.y + s * x + c * y))
             .collect();
+        self.fields = self.fields(map);
     }
 
     /// True when something seen lies where the body would pass along `path` (see [`braking_path`]). Each return
@@ -434,9 +434,6 @@ impl SimRobot {
         }
         let turn = self.follower.turn_rate(&doc.waypoints, &self.body, &self.limits);
         let target = doc.waypoints.get(self.follower.target()).map(|w| Point2::new(w.x, w.y));
-        if self.fields.len() != self.seen.len() {
-            self.fields = self.fields(&world.grid);
-        }
         let cmd = self.guard(cmd, target, turn, dt);
         // Held means blocked now, or blocked before and not yet STUCK_MOVE_M from where it was first held: a
         // robot whose guard lets a creep through between stops (at the edge of its safety field) is as stuck

@@ -111,7 +111,7 @@ impl Simulation {
             }
             if scan_due {
                 let ranges = self.config.lidar.scan(&self.world, &robot.body);
-                robot.observe(&self.config.lidar.points(&ranges));
+                robot.observe(&self.config.lidar.points(&ranges), &self.world.grid);
                 out.push(Outgoing::Scan { robot: i, ranges });
             }
         }

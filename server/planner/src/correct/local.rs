@@ -353,28 +353,45 @@ mod tests {
         );
     }
 
+    /// Seeded clusters of live points on a 10 × 8 m site: `clusters` of them, each of `points` points spread
+    /// over a random disc.
+    fn clusters(
+        rng: &mut rand_chacha::ChaCha8Rng,
+        clusters: std::ops::Range<i32>,
+        points: std::ops::Range<i32>,
+    ) -> Vec<Point2> {
+        use rand::Rng;
+        let mut live = Vec::new();
+        for _ in 0..rng.random_range(clusters) {
+            let c = Point2::new(rng.random_range(1.0..9.0), rng.random_range(1.0..7.0));
+            let spread = rng.random_range(0.01..1.0);
+            for _ in 0..rng.random_range(points.clone()) {
+                let (a, r) = (
+                    rng.random_range(0.0..std::f64::consts::TAU),
+                    spread * rng.random::<f64>().sqrt(),
+                );
+                live.push(c + nalgebra::Vector2::new(r * a.cos(), r * a.sin()));
+            }
+        }
+        live
+    }
+
+    /// A seeded query box `[lo, hi]` and radius for a cache on that site.
+    fn query_box(rng: &mut rand_chacha::ChaCha8Rng) -> (Point2, Point2, f64) {
+        use rand::Rng;
+        let lo = Point2::new(rng.random_range(0.5..4.0), rng.random_range(0.5..3.0));
+        let hi = lo + nalgebra::Vector2::new(rng.random_range(0.0..5.0), rng.random_range(0.0..4.0));
+        (lo, hi, rng.random_range(0.05..0.8))
+    }
+
     #[test]
     fn matches_brute_force_on_seeded_random_clouds() {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(0x10ca1);
         for _ in 0..12 {
-            let mut live = Vec::new();
-            for _ in 0..rng.random_range(1..5) {
-                let c = Point2::new(rng.random_range(1.0..9.0), rng.random_range(1.0..7.0));
-                let spread = rng.random_range(0.01..1.0);
-                for _ in 0..rng.random_range(1..400) {
-                    let (a, r) = (
-                        rng.random_range(0.0..std::f64::consts::TAU),
-                        spread * rng.random::<f64>().sqrt(),
-                    );
-                    live.push(c + nalgebra::Vector2::new(r * a.cos(), r * a.sin()));
-                }
-            }
-            let site = Site::new(walled(10.0, 8.0), live);
+            let site = Site::new(walled(10.0, 8.0), clusters(&mut rng, 1..5, 1..400));
             let world = site.world();
-            let lo = Point2::new(rng.random_range(0.5..4.0), rng.random_range(0.5..3.0));
-            let hi = lo + nalgebra::Vector2::new(rng.random_range(0.0..5.0), rng.random_range(0.0..4.0));
-            let radius = rng.random_range(0.05..0.8);
+            let (lo, hi, radius) = query_box(&mut rng);
             let local = LocalObstacles::new(&world, lo, hi, radius);
             for _ in 0..1500 {
                 let p = Point2::new(rng.random_range(lo.x..=hi.x), rng.random_range(lo.y..=hi.y));
@@ -403,23 +420,9 @@ mod tests {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(0x5a1e);
         for _ in 0..10 {
-            let mut live = Vec::new();
-            for _ in 0..rng.random_range(1..4) {
-                let c = Point2::new(rng.random_range(1.0..9.0), rng.random_range(1.0..7.0));
-                let spread = rng.random_range(0.01..1.0);
-                for _ in 0..rng.random_range(1..200) {
-                    let (a, r) = (
-                        rng.random_range(0.0..std::f64::consts::TAU),
-                        spread * rng.random::<f64>().sqrt(),
-                    );
-                    live.push(c + nalgebra::Vector2::new(r * a.cos(), r * a.sin()));
-                }
-            }
-            let site = Site::new(walled(10.0, 8.0), live);
+            let site = Site::new(walled(10.0, 8.0), clusters(&mut rng, 1..4, 1..200));
             let world = site.world_as_voxels();
-            let lo = Point2::new(rng.random_range(0.5..4.0), rng.random_range(0.5..3.0));
-            let hi = lo + nalgebra::Vector2::new(rng.random_range(0.0..5.0), rng.random_range(0.0..4.0));
-            let radius = rng.random_range(0.05..0.8);
+            let (lo, hi, radius) = query_box(&mut rng);
             let local = LocalObstacles::new(&world, lo, hi, radius);
             for _ in 0..1000 {
                 let p = Point2::new(rng.random_range(lo.x..=hi.x), rng.random_range(lo.y..=hi.y));

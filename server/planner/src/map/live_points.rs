@@ -83,14 +83,14 @@ impl<'a> LivePoints<'a> {
             let q = self.to_map(&q);
             return Some((q, (q - p).norm()));
         }
+        let first = self.nearest_on(&q, p);
         let bound = (self.to_map(&q) - p).norm() - self.reach_m();
         if bound >= upto {
-            return Some((self.nearest_on(&q, p), bound));
+            return Some((first, bound));
         }
-        let first = self.nearest_on(&q, p);
         let d0 = (first - p).norm();
         // A square nearer than d0 holds its point, so that point is within d0 + a diagonal of `p`.
-        let reach = (d0 + std::f64::consts::SQRT_2 * self.voxel_m) as f32 + 1e-4;
+        let reach = (d0 + self.reach_m()) as f32 + 1e-4;
         let bx = Aabb::new(
             Point3::new(local.x - reach, local.y - reach, f32::NEG_INFINITY),
             Point3::new(local.x + reach, local.y + reach, f32::INFINITY),
