@@ -429,14 +429,15 @@ fn cmd_plan(args: PlanArgs) -> Result<()> {
     );
     let d = profile.dwell;
     eprintln!(
-        "speed: duration {:.0} s  dwell_cv {:.3} (constant speed {:.3}{})  corners rounded {} sharp {}{}",
+        "speed: duration {:.0} s  {}  corners rounded {} sharp {}{}",
         d.duration_s,
-        d.dwell_cv,
-        d.dwell_cv_const_speed,
         if attribute.is_some() {
-            ""
+            format!(
+                "dwell_cv {:.3} (constant speed {:.3})",
+                d.dwell_cv, d.dwell_cv_const_speed
+            )
         } else {
-            ", no attribute: A = 1"
+            "no attribute: fastest profile, no dwell figures".to_owned()
         },
         profile.rounded_corners,
         profile.sharp_corners,

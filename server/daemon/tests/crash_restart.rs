@@ -223,6 +223,12 @@ async fn after_kill_9_a_mission_and_what_was_swept_are_restored_and_only_the_res
         after["warnings"].to_string().contains("the daemon restarted"),
         "{after}"
     );
+    // Both robots are still there with their plans half driven: their own plans are resumed, not the site
+    // divided again.
+    assert!(
+        after["warnings"].to_string().contains("resumed each robot's plan"),
+        "{after}"
+    );
     for (p, area) in after["plans"].as_array().context("plans")?.iter().zip(&areas) {
         let pid = p["plan_id"].as_str().context("plan id")?;
         let (_, doc) = daemon.get(&format!("/v1/plans/{pid}/path")).await?;

@@ -12,11 +12,13 @@ use shift_planner::geom::Point2;
 use shift_planner::map::grid::OccupancyGrid;
 use shift_planner::pipeline::fleet::{FleetParams, FleetPlan, plan_fleet_monitored};
 use shift_planner::pipeline::remainder::plan_fleet_remainder;
-use shift_planner::pipeline::{NoMonitor, PlanMonitor, PlanParams};
+use shift_planner::pipeline::resume::{FleetResume, Previous, ResumeParams, resume_fleet};
+use shift_planner::pipeline::{NoMonitor, PlanMonitor, PlanParams, Waypoint, WaypointKind};
 use shift_planner::remainder::RemainderParams;
 use shift_planner::space::RobotShape;
 use shift_planner::speed::SpeedLimits;
-use shift_proto::{MissionRequest, PlanDocument};
+use shift_planner::speed::attribute::AttributeMap;
+use shift_proto::{MissionRequest, PlanDocument, WaypointDoc, WaypointKindDoc};
 
 use crate::cell_mask::CellMask;
 use crate::job::{apply_overlay, attribute_map, objective};
@@ -43,6 +45,13 @@ pub struct MissionJob {
     /// A replan: the cells already swept (one flag per grid cell); only the rest is divided and planned, each
     /// robot from its `start` (where it is now).
     pub covered: Option<Arc<Vec<bool>>>,
+    /// A replan: per robot (in the request's order), the plan it is driving and the last waypoint it reached
+    /// on it (empty when a robot was lost with its part unfinished). When every robot has one, the job first
+    /// tries to resume them
+    /// ([`shift_planner::pipeline::resume`]): cheaper by far than a new division, and the robots keep the
+    /// paths they were driving; it divides the remainder again when resuming would leave ground out or
+    /// finish later.
+    pub previous: Vec<Option<(Arc<PlanDocument>, usize)>>,
 }
 
 /// One robot's planned part.
@@ -135,16 +144,71 @@ pub fn run_mission_job_monitored(job: &MissionJob, monitor: &mut dyn PlanMonitor
             &FleetParams::default(),
             monitor,
         ),
-        Some(covered) => Ok(plan_fleet_remainder(
-            &grid,
-            &robots,
-            covered,
-            (&params, &RemainderParams::default()),
-            attribute.as_ref(),
-            &FleetParams::default(),
-            monitor,
-        )?
-        .fleet),
+        Some(covered) => {
+            let why = match resume(job, &grid, &robots, covered, attribute.as_ref())? {
+                FleetResume::Resumed(resumed) => return Ok(resumed.fleet),
+                FleetResume::Refused(why) => why,
+            };
+            let mut fleet = plan_fleet_remainder(
+                &grid,
+                &robots,
+                covered,
+                (&params, &RemainderParams::default()),
+                attribute.as_ref(),
+                &FleetParams::default(),
+                monitor,
+            )?
+            .fleet;
+            fleet.division.warnings.push(why);
+            Ok(fleet)
+        }
+    }
+}
+
+/// The robots' plans resumed (see [`MissionJob::previous`]), or why the remainder is to be divided.
+fn resume(
+    job: &MissionJob,
+    grid: &OccupancyGrid,
+    robots: &[FleetRobot],
+    covered: &[bool],
+    attribute: Option<&AttributeMap>,
+) -> shift_planner::Result<FleetResume> {
+    if job.previous.len() != robots.len() || job.previous.iter().any(Option::is_none) {
+        return Ok(FleetResume::Refused(
+            "not resumed: the fleet changed (a robot lost with its part unfinished, or one without a plan of the mission)"
+                .into(),
+        ));
+    }
+    let paths: Vec<(Vec<Waypoint>, usize)> = (job.previous.iter().flatten())
+        .map(|(doc, reached)| (doc.waypoints.iter().map(planner_waypoint).collect(), *reached))
+        .collect();
+    let previous: Vec<Previous<'_>> = (paths.iter().zip(robots))
+        .map(|((path, reached), r)| Previous {
+            path,
+            reached: *reached,
+            from: r.start,
+        })
+        .collect();
+    resume_fleet(
+        grid,
+        robots,
+        &previous,
+        covered,
+        &RemainderParams::default(),
+        attribute,
+        &ResumeParams::default(),
+    )
+}
+
+/// A plan document's waypoint as the planner's.
+fn planner_waypoint(w: &WaypointDoc) -> Waypoint {
+    Waypoint {
+        position: Point2::new(w.x, w.y),
+        kind: match w.kind {
+            WaypointKindDoc::Cover => WaypointKind::Cover,
+            WaypointKindDoc::Transit => WaypointKind::Transit,
+        },
+        region: w.region,
     }
 }
 
@@ -152,15 +216,19 @@ pub fn run_mission_job_monitored(job: &MissionJob, monitor: &mut dyn PlanMonitor
 pub fn planned_outcome(job: &MissionJob, fleet: &FleetPlan, compute_ms: f64) -> MissionOutcome {
     let with_attribute = job.request.attribute.is_some();
     let parts = (fleet.division.parts.iter().zip(&fleet.plans).zip(&job.plan_ids))
-        .map(|((part, (output, profile)), plan_id)| PlannedPart {
-            doc: Arc::new(to_document(
-                plan_id,
-                (&part.space, output),
-                profile,
-                with_attribute,
-                compute_ms,
-            )),
-            warnings: output.warnings.clone(),
+        .enumerate()
+        .map(|(k, ((part, (output, profile)), plan_id))| {
+            let mut doc = to_document(plan_id, (&part.space, output), profile, with_attribute, compute_ms);
+            // A resumed plan sweeps the regions of the plan it resumes.
+            if output.regions.is_empty()
+                && let Some(Some((previous, _))) = job.previous.get(k)
+            {
+                doc.regions = previous.regions.clone();
+            }
+            PlannedPart {
+                doc: Arc::new(doc),
+                warnings: output.warnings.clone(),
+            }
         })
         .collect();
     MissionOutcome::Planned {

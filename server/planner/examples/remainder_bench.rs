@@ -6,17 +6,24 @@
 //! the uncovered area before and after cleaning, the area dropped and the area left, the time to clean and
 //! to replan (split into building the replan's space, planning, and the speed profile, which together are
 //! what `plan_remainder` does), the replanned length over the unfinished half's, and the replan's coverage of
-//! what was kept. `STAGES=1` adds the replan's progress timeline (progress, ms); `REPEAT=N` replans N times
-//! and reports the fastest (and makes the replan most of a profiler's samples).
+//! what was kept. Then the same remainder is *resumed* ([`shift_planner::pipeline::resume`]): the whole plan's
+//! profiled path (what a robot drives) walked for what still sweeps the remainder, timed whole and in its
+//! steps (cleaning, space, the path walk; the rest is metrics and the speed profile), and once more as a
+//! mission job runs it (`mission_resume_s`: `resume_fleet` from the site's grid, the robot's space built
+//! too). `RESUME_ONLY=1` skips the replan from scratch. `STAGES=1` adds the replan's progress timeline
+//! (progress, ms); `REPEAT=N` replans N times and reports the fastest (and makes the replan most of a
+//! profiler's samples).
 
 use std::path::Path;
 use std::time::Instant;
 
+use shift_planner::divide::FleetRobot;
 use shift_planner::geom::{Point2, polyline_length};
 use shift_planner::map::load_ros_map;
-use shift_planner::metrics::CoverageRaster;
+use shift_planner::metrics::{CoverageRaster, evaluate};
 use shift_planner::pipeline::remainder::{remainder_space, split_at_length};
-use shift_planner::pipeline::{NoMonitor, PlanMonitor, PlanOutput, PlanParams, plan};
+use shift_planner::pipeline::resume::{FleetResume, Previous, ResumeParams, plan_resume, resume_fleet, resume_path};
+use shift_planner::pipeline::{NoMonitor, PlanMonitor, PlanOutput, PlanParams, Waypoint, plan};
 use shift_planner::remainder::{Remainder, RemainderParams, remainder};
 use shift_planner::space::{CoverageSpace, RobotShape};
 use shift_planner::speed::{SpeedLimits, SpeedParams, profile_path};
@@ -128,6 +135,10 @@ fn bench(name: &str, space: &CoverageSpace) -> Result<(), String> {
         .and_then(|v| v.parse::<usize>().ok())
         .unwrap_or(1)
         .max(1);
+    resume_bench(name, space, &whole, repeat)?;
+    if std::env::var("RESUME_ONLY").is_ok() {
+        return Ok(());
+    }
     let mut runs = Vec::with_capacity(repeat);
     for _ in 0..repeat {
         runs.push(replan_once(space, &params, raster.covered(), from)?);
@@ -165,6 +176,104 @@ fn bench(name: &str, space: &CoverageSpace) -> Result<(), String> {
         m.collisions,
         out.decomposition.name(),
         out.pattern.name(),
+    );
+    Ok(())
+}
+
+/// Resumes the whole plan's profiled path driven half-way (see the module docs), `repeat` times; prints the
+/// fastest run's figures.
+fn resume_bench(name: &str, space: &CoverageSpace, whole: &PlanOutput, repeat: usize) -> Result<(), String> {
+    let speed = SpeedParams::new(SpeedLimits::default(), space.robot.tool_width_m);
+    let profile = profile_path(space, &whole.waypoints, None, &speed).map_err(|e| e.to_string())?;
+    let driven_path: Vec<Waypoint> = profile.waypoints.iter().map(|w| w.waypoint).collect();
+    let pts: Vec<Point2> = driven_path.iter().map(|w| w.position).collect();
+    let half = polyline_length(&pts) / 2.0;
+    let (driven, rest) = split_at_length(&pts, half);
+    let mut raster = CoverageRaster::new(*space.geometry(), space.robot.tool_width_m / 2.0);
+    raster.stamp_polyline(&driven);
+    let previous = Previous {
+        path: &driven_path,
+        reached: driven.len().saturating_sub(2),
+        from: rest[0],
+    };
+    let mut best: Option<(f64, f64, f64, f64)> = None;
+    let mut last = None;
+    for _ in 0..repeat {
+        let t = Instant::now();
+        let rem = remainder(space, raster.covered(), &RemainderParams::default()).map_err(|e| e.to_string())?;
+        let remainder_s = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let rspace = remainder_space(space, &rem, previous.from).map_err(|e| e.to_string())?;
+        let space_s = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let walked = resume_path(space, &rem.keep, &driven_path, previous.reached, rspace.start);
+        let path_s = t.elapsed().as_secs_f64();
+        drop(walked);
+        let t = Instant::now();
+        let resumed = plan_resume(
+            space,
+            raster.covered(),
+            previous,
+            &RemainderParams::default(),
+            None,
+            &speed,
+        )
+        .map_err(|e| e.to_string())?
+        .ok_or("the plan could not be resumed")?;
+        let total_s = t.elapsed().as_secs_f64();
+        if best.is_none_or(|b| total_s < b.0) {
+            best = Some((total_s, remainder_s, space_s, path_s));
+        }
+        last = Some(resumed);
+    }
+    let (Some((total_s, remainder_s, space_s, path_s)), Some((out, walked))) = (best, last) else {
+        return Ok(());
+    };
+    // What a mission job runs (shift_engine's mission_job): the fleet resume from the site's grid, its
+    // robot's space (clearance, reachable set) built first.
+    let robot = FleetRobot {
+        start: space.start,
+        shape: space.robot,
+        limits: SpeedLimits::default(),
+        footprint: None,
+    };
+    let t = Instant::now();
+    let fleet = resume_fleet(
+        &space.grid,
+        &[robot],
+        &[previous],
+        raster.covered(),
+        &RemainderParams::default(),
+        None,
+        &ResumeParams::default(),
+    )
+    .map_err(|e| e.to_string())?;
+    let fleet_s = t.elapsed().as_secs_f64();
+    if let FleetResume::Refused(why) = fleet {
+        return Err(why);
+    }
+    let unfinished = polyline_length(&rest);
+    let m = out.plan.metrics;
+    // The two steps after the walk, timed apart on the result.
+    let t = Instant::now();
+    let _ = evaluate(&out.space, &out.plan.points());
+    let metrics_s = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    profile_path(&out.space, &out.plan.waypoints, None, &speed).map_err(|e| e.to_string())?;
+    let profile_s = t.elapsed().as_secs_f64();
+    println!(
+        "{{\"scene\": \"{name}\", \"resume_total_s\": {total_s:.3}, \"remainder_s\": {remainder_s:.3}, \"space_s\": {space_s:.3}, \
+         \"path_s\": {path_s:.3}, \"mission_resume_s\": {fleet_s:.3}, \"metrics_s\": {metrics_s:.3}, \"profile_s\": {profile_s:.3}, \"runs\": {}, \"reused_m\": {:.0}, \"resumed_length_m\": {:.0}, \"unfinished_length_m\": {unfinished:.0}, \
+         \"length_ratio\": {:.3}, \"coverage_pct\": {:.2}, \"unswept_m2\": {:.2}, \"collisions\": {}, \"profile_collisions\": {}, \"driven_plan_collisions\": {}}}",
+        walked.runs,
+        walked.reused_m,
+        m.length_m,
+        m.length_m / unfinished.max(1e-9),
+        m.coverage_pct,
+        walked.unswept_cells as f64 * space.geometry().resolution.powi(2),
+        m.collisions,
+        out.profile.metrics.collisions,
+        profile.metrics.collisions,
     );
     Ok(())
 }

@@ -198,6 +198,7 @@ impl Engine {
                     options,
                     overlay: Vec::new(),
                     covered: None,
+                    previous: Vec::new(),
                 })));
                 let plan_ids = m.record.plan_ids.clone();
                 for id in plan_ids {

@@ -204,6 +204,7 @@ impl Engine {
         let mut request = m.record.request.clone();
         let mut plan_ids = Vec::new();
         let mut taking = Vec::new();
+        let mut previous = Vec::new();
         request.robots.clear();
         for (plan_id, r) in m.record.plan_ids.iter().zip(&m.record.request.robots) {
             if lost.contains(&r.id) {
@@ -214,25 +215,39 @@ impl Engine {
             // Without odometry since a restart, progress is still at the start: the record's driven fraction
             // (committed with the plan) says where along the plan the robot was.
             let fraction = self.plans.get(plan_id).map_or(0.0, |p| p.driven_fraction);
-            let on_plan = self
-                .robots
-                .get(&r.id)
+            // The plan it drives (this mission's), and the last waypoint it reached on it.
+            let driving = (self.robots.get(&r.id))
                 .and_then(|x| x.assignment.as_ref())
-                .and_then(|a| {
+                .filter(|a| a.plan_id == *plan_id && !a.doc.waypoints.is_empty())
+                .map(|a| {
                     let total = a.arc_m.last().copied().unwrap_or(0.0);
                     let at = a.arc_m.partition_point(|&s| s < fraction * total).max(a.index);
-                    let w = a.doc.waypoints.get(at.min(a.doc.waypoints.len().saturating_sub(1)))?;
-                    Some([w.x, w.y])
+                    (a.doc.clone(), at.min(a.doc.waypoints.len() - 1))
                 });
+            let on_plan = driving
+                .as_ref()
+                .map(|(doc, at)| [doc.waypoints[*at].x, doc.waypoints[*at].y]);
             if let Some(p) = at_pose.or(on_plan).filter(|p| p[0].is_finite() && p[1].is_finite()) {
                 r.start = p;
             }
+            previous.push(driving);
             taking.push(r.id.clone());
             plan_ids.push(plan_id.clone());
             request.robots.push(r);
         }
         if request.robots.is_empty() {
             return;
+        }
+        // A robot lost with its plan unfinished leaves ground only a new division gives out: no resume.
+        let unfinished = |plan_id: &String| {
+            self.plans
+                .get(plan_id)
+                .is_some_and(|p| matches!(p.status, PlanStatus::Active | PlanStatus::Ready))
+        };
+        let lost_unfinished = (m.record.plan_ids.iter().zip(&m.record.request.robots))
+            .any(|(plan_id, r)| lost.contains(&r.id) && unfinished(plan_id));
+        if lost_unfinished {
+            previous.clear();
         }
         let covered = Arc::new(raster.covered().to_vec());
         let grid = site.map.grid.clone();
@@ -254,6 +269,7 @@ impl Engine {
             options,
             overlay: Vec::new(),
             covered: Some(covered),
+            previous,
         })));
     }
 

@@ -429,3 +429,79 @@ fn a_mission_whose_robots_were_all_lost_is_picked_up_by_the_first_back() {
     assert_eq!(delivered(&c).len(), 1);
     assert_eq!(e.mission("m-1").map(|m| m.status), Some(MissionStatus::Active));
 }
+
+/// A replan asked for with every robot still driving resumes their plans: each gets a version 2 that starts
+/// where it stands, continues its own path (no longer than 1.2 × what it had left) and sweeps the regions of
+/// version 1, and the rest is still swept to the end.
+#[test]
+fn a_replan_with_every_robot_driving_resumes_their_plans() {
+    let (mut e, parts) = assigned();
+    let t = drive(
+        &mut e,
+        &[
+            ("r1", poses(&parts[0].doc, 0.0, 0.5)),
+            ("r2", poses(&parts[1].doc, 0.0, 0.5)),
+        ],
+        1_000,
+    );
+    let c = e
+        .handle(
+            Event::MissionReplanRequested {
+                mission_id: "m-1".into(),
+            },
+            t + 10,
+        )
+        .expect("asked");
+    let job = mission_job(&c).expect("a replan job");
+    assert!(
+        job.previous.iter().all(Option::is_some),
+        "both robots drive a plan of the mission"
+    );
+    let fleet = run_mission_job(&job).expect("replans");
+    let outcome = planned_outcome(&job, &fleet, 5.0);
+    let MissionOutcome::Planned { parts: v2_parts, .. } = &outcome else {
+        unreachable!()
+    };
+    let length = |w: &[shift_proto::WaypointDoc]| -> f64 {
+        w.windows(2).map(|p| (p[1].x - p[0].x).hypot(p[1].y - p[0].y)).sum()
+    };
+    for (k, (v1, v2)) in parts.iter().zip(v2_parts).enumerate() {
+        assert!(
+            v2.warnings.iter().any(|w| w.starts_with("resumed")),
+            "robot {k}: {:?} {:?} covered {}",
+            v2.warnings,
+            fleet.division.warnings,
+            job.covered.as_ref().map_or(0, |c| c.iter().filter(|&&x| x).count())
+        );
+        let at = job.request.robots[k].start;
+        let first = &v2.doc.waypoints[0];
+        assert!(
+            (first.x - at[0]).hypot(first.y - at[1]) < 0.5,
+            "robot {k} starts where it stands"
+        );
+        let rest = length(&v1.doc.waypoints) / 2.0;
+        let l2 = length(&v2.doc.waypoints);
+        assert!(l2 <= 1.2 * rest, "robot {k}: {l2:.1} m against {rest:.1} m left");
+        assert_eq!(v2.doc.regions, v1.doc.regions);
+    }
+    let c = e
+        .handle(
+            Event::MissionFinished {
+                mission_id: "m-1".into(),
+                outcome,
+            },
+            t + 20,
+        )
+        .expect("replanned");
+    let got = delivered(&c);
+    assert_eq!(got.len(), 2);
+    let t = drive(
+        &mut e,
+        &[("r1", poses(&got[0].1, 0.0, 1.0)), ("r2", poses(&got[1].1, 0.0, 1.0))],
+        t + 100,
+    );
+    alive(&mut e, "r1", true, t + 2_000);
+    let pct = e.missions.get("m-1").and_then(|m| m.raster.as_ref()).map(|r| r.pct());
+    assert!(pct.is_some_and(|p| p >= 97.0), "{pct:?}");
+    assert_eq!(e.mission("m-1").map(|m| m.status), Some(MissionStatus::Done));
+}

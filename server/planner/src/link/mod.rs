@@ -210,6 +210,11 @@ impl<'s> Linker<'s> {
         }
     }
 
+    /// The space it links on.
+    pub fn space(&self) -> &'s CoverageSpace {
+        self.space
+    }
+
     /// The parameters in use (after sanitizing).
     pub fn params(&self) -> &LinkParams {
         &self.params

@@ -18,7 +18,8 @@ use crate::speed::AttributeMap;
 use crate::speed::field::deposit_field;
 use crate::speed::time_param::segment_duration;
 
-/// Uniformity figures of a timed path.
+/// Uniformity figures of a timed path. A profile made without an attribute map does not compute the CVs
+/// (they are defined against one): they are NaN there, and only `duration_s` holds.
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
 pub struct DwellMetrics {
     /// CV of deposit / attribute over coverable cells for the profiled speeds (lower is more uniform).

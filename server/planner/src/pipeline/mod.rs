@@ -10,6 +10,7 @@ pub use objective::Objective;
 mod portfolio;
 pub mod prepare;
 pub mod remainder;
+pub mod resume;
 pub mod route;
 pub mod shaped;
 pub use shaped::plan_shaped;

@@ -96,7 +96,7 @@ pub struct SpeedProfile {
     pub sharp_corners: usize,
     /// True when smoothing was discarded because the smoothed path did worse than the input.
     pub smoothing_reverted: bool,
-    /// Dwell CV before refinement (open-loop law).
+    /// Dwell CV before refinement (open-loop law); NaN without an attribute map (as the CVs of `dwell`).
     pub open_loop_dwell_cv: f64,
 }
 
@@ -204,21 +204,65 @@ pub fn profile_path_where(
         })
         .collect();
     let metric_floor = metric_attribute_floor(a_hi, &limits);
-    let refined = refine::refine(
-        space,
-        &samples,
-        attribute,
-        &law,
-        &limits,
-        metric_floor,
-        targets,
-        if has_attribute { params.refine_iterations } else { 0 },
-        params.extra_time,
-    );
-    let speeds = refined.speeds_mps;
+    let (speeds, dwell, open_loop_dwell_cv) = if has_attribute {
+        let refined = refine::refine(
+            space,
+            &samples,
+            attribute,
+            &law,
+            &limits,
+            metric_floor,
+            targets,
+            params.refine_iterations,
+            params.extra_time,
+        );
+        let speeds = refined.speeds_mps;
+        let dwell = evaluate_dwell(
+            space,
+            &samples.points,
+            &speeds,
+            &samples.working,
+            attribute,
+            metric_floor,
+        );
+        (speeds, dwell, refined.open_loop_cv)
+    } else {
+        // No attribute map: the fastest profile the limits allow, and no uniformity figures (DESIGN §6 defines
+        // dwell CV against an attribute map; against A = 1 it would cost deposit fields over the whole grid
+        // for a figure nobody reads). The duration is filled in below.
+        let speeds = refine::capped_speeds(&samples, &targets, limits.a_max_mps2);
+        let dwell = DwellMetrics {
+            dwell_cv: f64::NAN,
+            dwell_cv_const_speed: f64::NAN,
+            duration_s: 0.0,
+        };
+        (speeds, dwell, f64::NAN)
+    };
     let t = time_param::times(&speeds, &samples.seg);
+    let dwell = if has_attribute {
+        dwell
+    } else {
+        DwellMetrics {
+            duration_s: t.last().copied().unwrap_or(0.0),
+            ..dwell
+        }
+    };
+    Ok(SpeedProfile {
+        waypoints: timed(&samples, &speeds, &t),
+        metrics,
+        dwell,
+        law,
+        rounded_corners: smoothed.rounded,
+        sharp_corners: smoothed.kept_sharp,
+        smoothing_reverted: reverted,
+        open_loop_dwell_cv,
+    })
+}
+
+/// The timed waypoints of `samples` driven at `speeds` (m/s), reaching each at `t` (s).
+fn timed(samples: &PathSamples, speeds: &[f64], t: &[f64]) -> Vec<TimedWaypoint> {
     let mut arc = 0.0;
-    let waypoints = (0..samples.points.len())
+    (0..samples.points.len())
         .map(|i| {
             if i > 0 {
                 arc += samples.seg[i - 1];
@@ -234,25 +278,7 @@ pub fn profile_path_where(
                 arc_m: arc,
             }
         })
-        .collect();
-    let dwell = evaluate_dwell(
-        space,
-        &samples.points,
-        &speeds,
-        &samples.working,
-        attribute,
-        metric_floor,
-    );
-    Ok(SpeedProfile {
-        waypoints,
-        metrics,
-        dwell,
-        law,
-        rounded_corners: smoothed.rounded,
-        sharp_corners: smoothed.kept_sharp,
-        smoothing_reverted: reverted,
-        open_loop_dwell_cv: refined.open_loop_cv,
-    })
+        .collect()
 }
 
 /// The attribute floor of the dwell-uniformity metric for attributes up to `a_hi`: a_hi · v_min / v_max, the

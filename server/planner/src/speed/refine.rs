@@ -52,8 +52,7 @@ struct Simulator<'a> {
 impl Simulator<'_> {
     fn run(&self, targets: &[f64]) -> Simulated {
         let g = self.space.geometry();
-        let caps: Vec<f64> = targets.iter().zip(&self.samples.caps).map(|(t, c)| t.min(*c)).collect();
-        let speeds = limit_acceleration(&caps, &self.samples.seg, self.a_max);
+        let speeds = capped_speeds(self.samples, targets, self.a_max);
         let durations: Vec<f64> = self
             .samples
             .seg
@@ -71,6 +70,13 @@ impl Simulator<'_> {
         let cv = field_cv(self.space, &deposit, self.attribute, self.floor);
         Simulated { speeds, deposit, cv }
     }
+}
+
+/// The speeds a robot drives `samples` at when it aims at `targets` (m/s): each within its sample's cap,
+/// then the acceleration pass (`a_max`, m/s²).
+pub fn capped_speeds(samples: &PathSamples, targets: &[f64], a_max: f64) -> Vec<f64> {
+    let caps: Vec<f64> = targets.iter().zip(&samples.caps).map(|(t, c)| t.min(*c)).collect();
+    limit_acceleration(&caps, &samples.seg, a_max)
 }
 
 /// Runs `iterations` refinement steps from the open-loop speed targets `targets` (m/s, already within the

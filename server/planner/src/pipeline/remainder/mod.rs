@@ -20,7 +20,7 @@ use crate::speed::{SpeedParams, SpeedProfile};
 use super::fleet::{FleetParams, FleetPlan, plan_fleet_with};
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 use super::{PlanMonitor, PlanOutput, PlanParams, plan_shaped};
 
 /// A robot's replan.

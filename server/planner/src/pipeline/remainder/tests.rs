@@ -7,13 +7,13 @@ use crate::pipeline::{NoMonitor, plan};
 use crate::space::RobotShape;
 use crate::speed::SpeedLimits;
 
-const SHAPE: RobotShape = RobotShape {
+pub(crate) const SHAPE: RobotShape = RobotShape {
     radius_m: 0.3,
     tool_width_m: 0.6,
 };
 
 /// A walled 14 m × 9 m room at 0.1 m with pillars and a box.
-fn room() -> OccupancyGrid {
+pub(crate) fn room() -> OccupancyGrid {
     let g = GridGeometry::new(140, 90, 0.1, Point2::origin()).expect("valid");
     let mut grid = OccupancyGrid::filled(g, CellState::Free);
     for (x0, y0, x1, y1) in [

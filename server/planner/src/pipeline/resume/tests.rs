@@ -1,0 +1,257 @@
+use super::*;
+use crate::geom::polyline_length;
+use crate::map::{CellState, GridGeometry};
+use crate::metrics::CoverageRaster;
+use crate::pipeline::fleet::{FleetParams, plan_fleet};
+use crate::pipeline::remainder::tests::{SHAPE, room};
+use crate::pipeline::{NoMonitor, remainder::split_at_length};
+use crate::pipeline::{PlanParams, plan_shaped};
+use crate::speed::SpeedLimits;
+
+fn stamp(g: GridGeometry, path: &[Point2]) -> Vec<bool> {
+    let mut raster = CoverageRaster::new(g, SHAPE.tool_width_m / 2.0);
+    raster.stamp_polyline(path);
+    raster.covered().to_vec()
+}
+
+fn speed() -> SpeedParams {
+    SpeedParams::new(SpeedLimits::default(), SHAPE.tool_width_m)
+}
+
+/// The plan a robot drives: its profile's (smoothed, sampled) waypoints, as a plan document holds them.
+fn driven_plan(space: &CoverageSpace) -> Vec<Waypoint> {
+    let (_, profile) = plan_shaped(space, &PlanParams::default(), None, &speed(), &mut NoMonitor).expect("plans");
+    profile.waypoints.iter().map(|w| w.waypoint).collect()
+}
+
+/// The waypoint a robot `driven_m` along `path` has reached.
+fn reached_at(path: &[Waypoint], driven_m: f64) -> usize {
+    let pts: Vec<Point2> = path.iter().map(|w| w.position).collect();
+    let (driven, _) = split_at_length(&pts, driven_m);
+    driven.len().saturating_sub(2)
+}
+
+/// Checks a resumed path: from `from` to the previous plan's dock, every segment valid, the kept remainder
+/// swept (≥ 99 %), never colliding.
+fn check(out: &RemainderPlan, path: &ResumedPath, previous: &[Waypoint], from: Point2) {
+    // Every kept cell the previous plan sweeps, the resumed path sweeps (the rest are the plan's own misses).
+    let pts: Vec<Point2> = previous.iter().map(|w| w.position).collect();
+    let whole = stamp(*out.space.geometry(), &pts);
+    let lost = (0..whole.len())
+        .filter(|&i| out.remainder.keep[i] && whole[i] && !path.swept[i])
+        .count();
+    assert_eq!(lost, 0);
+    let m = out.plan.metrics;
+    assert!(m.coverage_pct >= 99.0, "coverage {:.2} %", m.coverage_pct);
+    assert_eq!(m.collisions, 0);
+    let pts = out.plan.points();
+    assert!((pts[0] - from).norm() < 0.2, "starts at {:?}", pts[0]);
+    assert_eq!(pts.last(), previous.last().map(|w| &w.position));
+    for w in pts.windows(2) {
+        assert!(out.space.segment_ok(w[0], w[1]), "{w:?}");
+    }
+}
+
+/// The figure for a resume: drive the first half of the plan, resume from there. What is left is
+/// covered, and the path is no longer than 1.2 × the unfinished half (here it is that half, shortcut where
+/// it crossed driven ground).
+#[test]
+fn a_plan_driven_half_way_resumes_with_its_unfinished_half() {
+    let space = CoverageSpace::new(room(), SHAPE, Point2::new(1.0, 1.0)).expect("space");
+    let previous = driven_plan(&space);
+    let pts: Vec<Point2> = previous.iter().map(|w| w.position).collect();
+    let half = polyline_length(&pts) / 2.0;
+    let (driven, rest) = split_at_length(&pts, half);
+    let covered = stamp(*space.geometry(), &driven);
+    let from = rest[0];
+    let prev = Previous {
+        path: &previous,
+        reached: reached_at(&previous, half),
+        from,
+    };
+    let (out, path) = plan_resume(&space, &covered, prev, &RemainderParams::default(), None, &speed())
+        .expect("plans")
+        .expect("resumes");
+    check(&out, &path, &previous, from);
+    let ratio = out.plan.metrics.length_m / polyline_length(&rest);
+    assert!(
+        ratio <= 1.05,
+        "resumed {:.1} m over the unfinished {:.1} m",
+        out.plan.metrics.length_m,
+        polyline_length(&rest)
+    );
+    assert_eq!(path.inserted, 0);
+}
+
+/// A stretch missed early (a blocked lane the corrections skipped) is put back on the way, and a robot
+/// that comes back elsewhere (relocalised across the room) still resumes from where it is.
+#[test]
+fn a_missed_stretch_is_put_back_and_a_moved_robot_resumes_from_where_it_is() {
+    let space = CoverageSpace::new(room(), SHAPE, Point2::new(1.0, 1.0)).expect("space");
+    let previous = driven_plan(&space);
+    let pts: Vec<Point2> = previous.iter().map(|w| w.position).collect();
+    let total = polyline_length(&pts);
+    // Driven: the first 60 %, except 10 % to 15 % (missed).
+    let (first, _) = split_at_length(&pts, 0.10 * total);
+    let (upto, _) = split_at_length(&pts, 0.60 * total);
+    let (_, after_gap) = split_at_length(&upto, 0.15 * total);
+    let mut covered = stamp(*space.geometry(), &first);
+    for (c, d) in covered.iter_mut().zip(stamp(*space.geometry(), &after_gap)) {
+        *c |= d;
+    }
+    let from = Point2::new(12.5, 8.0);
+    let prev = Previous {
+        path: &previous,
+        reached: reached_at(&previous, 0.60 * total),
+        from,
+    };
+    let (out, path) = plan_resume(&space, &covered, prev, &RemainderParams::default(), None, &speed())
+        .expect("plans")
+        .expect("resumes");
+    check(&out, &path, &previous, from);
+    assert!(path.inserted >= 1, "the missed stretch is not put back");
+    let (_, rest) = split_at_length(&pts, 0.60 * total);
+    let missed = polyline_length(&split_at_length(&pts, 0.15 * total).0) - 0.10 * total;
+    // The missed stretch and the way to it and back, plus the robot's way to the plan.
+    assert!(
+        out.plan.metrics.length_m <= polyline_length(&rest) + 3.0 * missed + 30.0,
+        "resumed {:.1} m, unfinished {:.1} m + missed {missed:.1} m",
+        out.plan.metrics.length_m,
+        polyline_length(&rest)
+    );
+}
+
+/// Nothing left: the resumed path goes home.
+#[test]
+fn a_finished_plan_resumes_to_its_dock() {
+    let space = CoverageSpace::new(room(), SHAPE, Point2::new(1.0, 1.0)).expect("space");
+    let previous = driven_plan(&space);
+    let pts: Vec<Point2> = previous.iter().map(|w| w.position).collect();
+    let covered = stamp(*space.geometry(), &pts);
+    let from = Point2::new(7.0, 6.0);
+    let prev = Previous {
+        path: &previous,
+        reached: previous.len() - 1,
+        from,
+    };
+    let (out, path) = plan_resume(&space, &covered, prev, &RemainderParams::default(), None, &speed())
+        .expect("plans")
+        .expect("resumes");
+    assert_eq!(path.runs, 0);
+    let ends = out.plan.points();
+    assert_eq!(ends.first(), Some(&from));
+    assert_eq!(ends.last(), Some(&pts[pts.len() - 1]));
+}
+
+fn fleet_robots() -> Vec<FleetRobot> {
+    [(1.0, 1.0), (12.5, 7.5)]
+        .into_iter()
+        .map(|(x, y)| FleetRobot {
+            start: Point2::new(x, y),
+            shape: SHAPE,
+            limits: SpeedLimits::default(),
+            footprint: None,
+        })
+        .collect()
+}
+
+/// A fleet half-way through its plans resumes them (balanced, nothing they held left out), also round a
+/// new obstacle; a fleet whose robots are far apart in progress is divided again.
+#[test]
+fn a_fleet_resumes_its_plans_round_a_new_obstacle_but_not_when_uneven() {
+    let grid = room();
+    let robots = fleet_robots();
+    let fleet = plan_fleet(&grid, &robots, &PlanParams::default(), None, &FleetParams::default()).expect("plans");
+    let paths: Vec<Vec<Waypoint>> = (fleet.plans.iter())
+        .map(|(_, p)| p.waypoints.iter().map(|w| w.waypoint).collect())
+        .collect();
+    let mut covered = vec![false; grid.geometry.len()];
+    let mut previous = Vec::new();
+    for path in &paths {
+        let pts: Vec<Point2> = path.iter().map(|w| w.position).collect();
+        let half = polyline_length(&pts) / 2.0;
+        let (driven, rest) = split_at_length(&pts, half);
+        for (c, d) in covered.iter_mut().zip(stamp(grid.geometry, &driven)) {
+            *c |= d;
+        }
+        previous.push(Previous {
+            path,
+            reached: reached_at(path, half),
+            from: rest[0],
+        });
+    }
+    let params = ResumeParams::default();
+    let rp = RemainderParams::default();
+    let resumed = match resume_fleet(&grid, &robots, &previous, &covered, &rp, None, &params).expect("plans") {
+        FleetResume::Resumed(r) => r,
+        FleetResume::Refused(why) => panic!("{why}"),
+    };
+    // Every kept cell the previous plans sweep is swept by the resumed ones (the rest, under 2 % of what is
+    // left here, are the plans' own misses along walls and pillars).
+    let mut before = vec![false; grid.geometry.len()];
+    let mut after = vec![false; grid.geometry.len()];
+    for (path, (_, profile)) in paths.iter().zip(&resumed.fleet.plans) {
+        let pts: Vec<Point2> = path.iter().map(|w| w.position).collect();
+        for (i, c) in stamp(grid.geometry, &pts).into_iter().enumerate() {
+            before[i] |= c;
+        }
+        for (i, c) in stamp(grid.geometry, &profile.points()).into_iter().enumerate() {
+            after[i] |= c;
+        }
+    }
+    let coverable = &resumed.fleet.division.coverable;
+    let lost = (0..before.len())
+        .filter(|&i| coverable[i] && before[i] && !after[i])
+        .count();
+    assert_eq!(lost, 0);
+    assert!(
+        resumed.fleet.metrics.union_coverage_pct >= 98.0,
+        "{:?}",
+        resumed.fleet.metrics
+    );
+    for (output, _) in &resumed.fleet.plans {
+        assert_eq!(output.metrics.collisions, 0);
+        assert!(output.metrics.coverage_pct >= 99.0);
+    }
+    // A live obstacle now stands on robot 1's unfinished lanes (the replan's grid holds it): the fleet still
+    // resumes, its paths keep clear of it, and what it loses is the sliver round the obstacle the
+    // remainder's rule would drop too.
+    let rest1: Vec<Point2> = previous[1].path[previous[1].reached..]
+        .iter()
+        .map(|w| w.position)
+        .collect();
+    let block = rest1[rest1.len() / 3];
+    let mut blocked = grid.clone();
+    blocked.fill_disk(block, 1.0, CellState::Occupied);
+    match resume_fleet(&blocked, &robots, &previous, &covered, &rp, None, &params).expect("runs") {
+        FleetResume::Resumed(r) => {
+            for (part, (output, _)) in r.fleet.division.parts.iter().zip(&r.fleet.plans) {
+                assert_eq!(output.metrics.collisions, 0);
+                let pts = output.points();
+                assert!(pts.windows(2).all(|w| part.space.segment_ok(w[0], w[1])));
+            }
+            assert!(r.fleet.metrics.union_coverage_pct >= 97.0, "{:?}", r.fleet.metrics);
+        }
+        FleetResume::Refused(why) => panic!("{why}"),
+    }
+    // Robot 0 nearly done while robot 1 has most of its part left: a new division finishes sooner.
+    let mut uneven = vec![false; grid.geometry.len()];
+    let mut prev = Vec::new();
+    for (path, share) in paths.iter().zip([0.9, 0.1]) {
+        let pts: Vec<Point2> = path.iter().map(|w| w.position).collect();
+        let at = share * polyline_length(&pts);
+        let (driven, rest) = split_at_length(&pts, at);
+        for (c, d) in uneven.iter_mut().zip(stamp(grid.geometry, &driven)) {
+            *c |= d;
+        }
+        prev.push(Previous {
+            path,
+            reached: reached_at(path, at),
+            from: rest[0],
+        });
+    }
+    match resume_fleet(&grid, &robots, &prev, &uneven, &rp, None, &params).expect("runs") {
+        FleetResume::Refused(why) => assert!(why.contains("the mean"), "{why}"),
+        FleetResume::Resumed(r) => panic!("resumed: {:?}", r.fleet.metrics),
+    }
+}
