@@ -238,6 +238,10 @@ fn resume_bench(name: &str, space: &CoverageSpace, whole: &PlanOutput, repeat: u
         footprint: None,
     };
     let t = Instant::now();
+    let rebuilt = CoverageSpace::new(space.grid.clone(), space.robot, previous.from).map_err(|e| e.to_string())?;
+    let space_build_s = t.elapsed().as_secs_f64();
+    drop(rebuilt);
+    let t = Instant::now();
     let fleet = resume_fleet(
         &space.grid,
         &[robot],
@@ -263,7 +267,7 @@ fn resume_bench(name: &str, space: &CoverageSpace, whole: &PlanOutput, repeat: u
     let profile_s = t.elapsed().as_secs_f64();
     println!(
         "{{\"scene\": \"{name}\", \"resume_total_s\": {total_s:.3}, \"remainder_s\": {remainder_s:.3}, \"space_s\": {space_s:.3}, \
-         \"path_s\": {path_s:.3}, \"mission_resume_s\": {fleet_s:.3}, \"metrics_s\": {metrics_s:.3}, \"profile_s\": {profile_s:.3}, \"runs\": {}, \"reused_m\": {:.0}, \"resumed_length_m\": {:.0}, \"unfinished_length_m\": {unfinished:.0}, \
+         \"path_s\": {path_s:.3}, \"mission_resume_s\": {fleet_s:.3}, \"of_which_space_s\": {space_build_s:.3}, \"metrics_s\": {metrics_s:.3}, \"profile_s\": {profile_s:.3}, \"runs\": {}, \"reused_m\": {:.0}, \"resumed_length_m\": {:.0}, \"unfinished_length_m\": {unfinished:.0}, \
          \"length_ratio\": {:.3}, \"coverage_pct\": {:.2}, \"unswept_m2\": {:.2}, \"collisions\": {}, \"profile_collisions\": {}, \"driven_plan_collisions\": {}}}",
         walked.runs,
         walked.reused_m,

@@ -228,18 +228,31 @@ pub fn resume_fleet(
     // out of reach), cleaned by the remainder's own rule. Ground outside every previous path's swath is not
     // counted: the plans' own misses along walls were left out when they were made.
     let kept = coverable.iter().filter(|&&c| c).count();
-    let mut held = vec![false; g.len()];
-    for (robot, prev) in robots.iter().zip(previous) {
-        let half = robot.shape.tool_width_m / 2.0;
-        for w in prev.path.windows(2) {
-            for_each_cell_in_capsule(&g, w[0].position, w[1].position, half, |i| held[i] = true);
+    let bound = params.max_unswept_share * kept as f64;
+    let unswept = (0..g.len()).filter(|&i| coverable[i] && !swept_any[i]).count();
+    // Each step below only drops cells from the count: within the bound at any step, within it at the end
+    // (and the passes over the grid after it are spared).
+    let left = if unswept as f64 <= bound {
+        unswept
+    } else {
+        let mut held = vec![false; g.len()];
+        for (robot, prev) in robots.iter().zip(previous) {
+            let half = robot.shape.tool_width_m / 2.0;
+            for w in prev.path.windows(2) {
+                for_each_cell_in_capsule(&g, w[0].position, w[1].position, half, |i| held[i] = true);
+            }
         }
-    }
-    let done: Vec<bool> = (0..g.len()).map(|i| swept_any[i] || !held[i]).collect();
-    let left: usize = (shapes.iter())
-        .map(|(_, space, _)| remainder(space, &done, remainder_params).map(|r| r.kept_cells))
-        .sum::<Result<usize>>()?;
-    if kept > 0 && left as f64 > params.max_unswept_share * kept as f64 {
+        let done: Vec<bool> = (0..g.len()).map(|i| swept_any[i] || !held[i]).collect();
+        let raw = (0..g.len()).filter(|&i| coverable[i] && !done[i]).count();
+        if raw as f64 <= bound {
+            raw
+        } else {
+            (shapes.iter())
+                .map(|(_, space, _)| remainder(space, &done, remainder_params).map(|r| r.kept_cells))
+                .sum::<Result<usize>>()?
+        }
+    };
+    if kept > 0 && left as f64 > bound {
         return refused(&format!(
             "the robots' plans can no longer sweep {:.1} m² of the {:.1} m² left (a live obstacle, or no way there)",
             left as f64 * g.resolution * g.resolution,

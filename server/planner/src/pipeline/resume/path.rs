@@ -102,35 +102,46 @@ pub fn resume_path(
     let ends = |p: &Piece| (at(previous, p.seg, p.t0), at(previous, p.seg, p.t1));
     // Round 1: pieces whose swath is mostly still to cover; round 2: any piece sweeping a kept cell no kept
     // piece sweeps yet. A piece a live obstacle now blocks is never kept.
+    // (The validity check, the dearest, runs only on pieces the swath test would keep.)
     let mut swept = vec![false; g.len()];
     let mut useful = vec![false; pieces.len()];
-    let mut usable = vec![true; pieces.len()];
+    let mut cells: Vec<usize> = Vec::new();
     for (k, p) in pieces.iter().enumerate() {
         let (a, b) = ends(p);
-        if !space.segment_ok(a, b) {
-            usable[k] = false;
-            continue;
-        }
-        let (mut kept, mut ground) = (0usize, 0usize);
+        cells.clear();
+        let mut ground = 0usize;
         for_each_cell_in_capsule(&g, a, b, half, |i| {
-            kept += usize::from(keep[i]);
+            if keep[i] {
+                cells.push(i);
+            }
             ground += usize::from(space.coverable[i] || keep[i]);
         });
-        if kept > 0 && kept as f64 >= FIRST_ROUND_SHARE * ground as f64 {
+        let kept = cells.len();
+        if kept > 0 && kept as f64 >= FIRST_ROUND_SHARE * ground as f64 && space.segment_ok(a, b) {
             useful[k] = true;
-            for_each_cell_in_capsule(&g, a, b, half, |i| swept[i] |= keep[i]);
+            for &i in &cells {
+                swept[i] = true;
+            }
         }
     }
     for (k, p) in pieces.iter().enumerate() {
-        if useful[k] || !usable[k] {
+        if useful[k] {
             continue;
         }
         let (a, b) = ends(p);
+        cells.clear();
         let mut fresh = false;
-        for_each_cell_in_capsule(&g, a, b, half, |i| fresh |= keep[i] && !swept[i]);
-        if fresh {
+        for_each_cell_in_capsule(&g, a, b, half, |i| {
+            if keep[i] {
+                cells.push(i);
+                fresh |= !swept[i];
+            }
+        });
+        if fresh && space.segment_ok(a, b) {
             useful[k] = true;
-            for_each_cell_in_capsule(&g, a, b, half, |i| swept[i] |= keep[i]);
+            for &i in &cells {
+                swept[i] = true;
+            }
         }
     }
     let unswept_cells = (0..g.len()).filter(|&i| keep[i] && !swept[i]).count();
