@@ -28,7 +28,7 @@
 //! kept cell. The replan ([`crate::pipeline::remainder`]) decomposes it alone ([`CoverageSpace::work`]),
 //! so lanes sit on the remainder and transits cross covered ground.
 
-mod disc;
+pub(crate) mod disc;
 #[cfg(test)]
 pub(crate) mod tests;
 

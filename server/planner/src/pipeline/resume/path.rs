@@ -5,6 +5,7 @@ use crate::geom::{Point2, polyline_length};
 use crate::link::{LinkParams, Linker};
 use crate::metrics::coverage::for_each_cell_in_capsule;
 use crate::pipeline::{Waypoint, WaypointKind};
+use crate::remainder::disc::{Disc, RowSums};
 use crate::space::CoverageSpace;
 
 /// A pass is kept in the first round when at least this share of the coverable ground its tool sweeps is
@@ -98,8 +99,15 @@ pub fn resume_path(
 ) -> Option<ResumedPath> {
     let g = *space.geometry();
     let half = space.robot.tool_width_m / 2.0;
-    let pieces = pieces(previous, space.robot.tool_width_m.max(g.resolution));
+    let step = space.robot.tool_width_m.max(g.resolution);
+    let pieces = pieces(previous, step);
     let ends = |p: &Piece| (at(previous, p.seg, p.t0), at(previous, p.seg, p.t1));
+    // Every cell a piece's swath holds lies within half a piece and half a tool of its midpoint, so within
+    // `reach` of the centre of the midpoint's cell: a piece with no kept cell there is skipped unwalked (most
+    // of the driven part of the plan).
+    let near = RowSums::new(&g, |i| keep[i]);
+    let reach = Disc::new(step / 2.0 + half + g.resolution, g.resolution);
+    let may_sweep = |a: Point2, b: Point2| g.locate(a + (b - a) * 0.5).is_none_or(|c| near.any(&reach, g.index(c)));
     // Round 1: pieces whose swath is mostly still to cover; round 2: any piece sweeping a kept cell no kept
     // piece sweeps yet. A piece a live obstacle now blocks is never kept.
     // (The validity check, the dearest, runs only on pieces the swath test would keep.)
@@ -108,6 +116,9 @@ pub fn resume_path(
     let mut cells: Vec<usize> = Vec::new();
     for (k, p) in pieces.iter().enumerate() {
         let (a, b) = ends(p);
+        if !may_sweep(a, b) {
+            continue;
+        }
         cells.clear();
         let mut ground = 0usize;
         for_each_cell_in_capsule(&g, a, b, half, |i| {
@@ -129,6 +140,9 @@ pub fn resume_path(
             continue;
         }
         let (a, b) = ends(p);
+        if !may_sweep(a, b) {
+            continue;
+        }
         cells.clear();
         let mut fresh = false;
         for_each_cell_in_capsule(&g, a, b, half, |i| {
