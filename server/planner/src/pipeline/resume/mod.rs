@@ -183,10 +183,12 @@ pub fn resume_fleet(
     let mut owner = vec![NO_OWNER; g.len()];
     let mut swept_any = covered.to_vec();
     let (mut parts, mut plans, mut remainders) = (Vec::new(), Vec::new(), Vec::new());
-    // Robots of one shape share a space and a remainder (neither depends on the start).
+    // Robots of one shape standing on one reachable set share a space and a remainder (neither depends on
+    // where on it the robot stands).
     let mut shapes: Vec<(crate::space::RobotShape, CoverageSpace, crate::remainder::Remainder)> = Vec::new();
     for (k, (robot, prev)) in robots.iter().zip(previous).enumerate() {
-        let at = match shapes.iter().position(|(s, _, _)| *s == robot.shape) {
+        let on = |s: &CoverageSpace| g.locate(prev.from).is_some_and(|c| s.reachable[g.index(c)]);
+        let at = match shapes.iter().position(|(s, space, _)| *s == robot.shape && on(space)) {
             Some(at) => at,
             None => {
                 let space = CoverageSpace::new(grid.clone(), robot.shape, prev.from)?;

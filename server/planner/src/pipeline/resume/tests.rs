@@ -255,3 +255,42 @@ fn a_fleet_resumes_its_plans_round_a_new_obstacle_but_not_when_uneven() {
         FleetResume::Resumed(r) => panic!("resumed: {:?}", r.fleet.metrics),
     }
 }
+
+/// Two robots of one shape in two rooms with no door between them: each resumes in its own room (a space
+/// built for one robot's room would leave the other nowhere to go).
+#[test]
+fn robots_of_one_shape_in_rooms_apart_each_resume_in_their_own() {
+    let mut grid = room();
+    grid.fill_rect(6.9, 0.0, 7.1, 9.0, CellState::Occupied);
+    let robots = fleet_robots();
+    let fleet = plan_fleet(&grid, &robots, &PlanParams::default(), None, &FleetParams::default()).expect("plans");
+    let paths: Vec<Vec<Waypoint>> = (fleet.plans.iter())
+        .map(|(_, p)| p.waypoints.iter().map(|w| w.waypoint).collect())
+        .collect();
+    let mut covered = vec![false; grid.geometry.len()];
+    let mut previous = Vec::new();
+    for path in &paths {
+        let pts: Vec<Point2> = path.iter().map(|w| w.position).collect();
+        let half = polyline_length(&pts) / 2.0;
+        let (driven, rest) = split_at_length(&pts, half);
+        for (c, d) in covered.iter_mut().zip(stamp(grid.geometry, &driven)) {
+            *c |= d;
+        }
+        previous.push(Previous {
+            path,
+            reached: reached_at(path, half),
+            from: rest[0],
+        });
+    }
+    let rp = RemainderParams::default();
+    match resume_fleet(&grid, &robots, &previous, &covered, &rp, None, &ResumeParams::default()).expect("runs") {
+        FleetResume::Resumed(r) => {
+            for ((output, _), robot) in r.fleet.plans.iter().zip(&robots) {
+                let left_room = robot.start.x < 7.0;
+                assert!(output.points().iter().all(|p| (p.x < 7.0) == left_room));
+                assert!(output.metrics.coverage_pct >= 97.0, "{:?}", output.metrics);
+            }
+        }
+        FleetResume::Refused(why) => panic!("{why}"),
+    }
+}
