@@ -206,7 +206,13 @@ fn resume_bench(name: &str, space: &CoverageSpace, whole: &PlanOutput, repeat: u
         let rspace = remainder_space(space, &rem, previous.from).map_err(|e| e.to_string())?;
         let space_s = t.elapsed().as_secs_f64();
         let t = Instant::now();
-        let walked = resume_path(space, &rem.keep, &driven_path, previous.reached, rspace.start);
+        let walked = resume_path(
+            space,
+            &rem.keep,
+            &driven_path,
+            (previous.reached, rspace.start),
+            RemainderParams::default().min_new_share,
+        );
         let path_s = t.elapsed().as_secs_f64();
         drop(walked);
         let t = Instant::now();

@@ -6,9 +6,10 @@
 //!
 //! **The rule.** The previous path is cut into pieces no longer than a tool width. A piece is kept when its
 //! swath (the tool's capsule along it, DESIGN §6) is mostly ground the cleaned remainder
-//! ([`crate::remainder`]) still holds: at least half, the remainder's own "a pass worth driving" share.
-//! Then, so that nothing the previous path would have covered is lost, a piece is kept too when it sweeps a
-//! kept cell no kept piece sweeps. Consecutive kept pieces form runs. The runs ahead of the robot keep the
+//! ([`crate::remainder`]) still holds: at least `RemainderParams::min_new_share` of it (default half), the
+//! remainder's own "a pass worth driving" share, so the two rules cannot drift apart. Then, so that nothing
+//! the previous path would have covered is lost, a piece is kept too when it sweeps a kept cell no kept
+//! piece sweeps. Consecutive kept pieces form runs. The runs ahead of the robot keep the
 //! plan's order (it was optimised for the whole site, and any tail of a good tour is a good tour of its
 //! stops); runs behind it (stretches the robot missed: a blocked lane the corrections skipped) are put
 //! where they add least (cheapest insertion, either direction). Runs are joined by a link no longer than the
@@ -132,7 +133,13 @@ pub fn plan_resume(
 ) -> Result<Option<(RemainderPlan, ResumedPath)>> {
     let rem = remainder(space, covered, remainder_params)?;
     let rspace = remainder_space(space, &rem, previous.from)?;
-    let Some(path) = resume_path(space, &rem.keep, previous.path, previous.reached, rspace.start) else {
+    let Some(path) = resume_path(
+        space,
+        &rem.keep,
+        previous.path,
+        (previous.reached, rspace.start),
+        remainder_params.min_new_share,
+    ) else {
         return Ok(None);
     };
     let (plan, profile) = resumed_output(&rspace, &path, attribute, speed)?;
@@ -202,7 +209,13 @@ pub fn resume_fleet(
             *c |= keep;
         }
         let mut rspace = remainder_space(space, rem, prev.from)?;
-        let Some(path) = resume_path(space, &rem.keep, prev.path, prev.reached, rspace.start) else {
+        let Some(path) = resume_path(
+            space,
+            &rem.keep,
+            prev.path,
+            (prev.reached, rspace.start),
+            remainder_params.min_new_share,
+        ) else {
             return refused("a robot cannot reach what its plan has left");
         };
         // Its share: the kept cells it sweeps (its metrics count against these).

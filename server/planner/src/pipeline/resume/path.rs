@@ -8,13 +8,6 @@ use crate::pipeline::{Waypoint, WaypointKind};
 use crate::remainder::disc::{Disc, RowSums};
 use crate::space::CoverageSpace;
 
-/// A pass is kept in the first round when at least this share of the coverable ground its tool sweeps is
-/// still to cover: the remainder's own rule for "a pass worth driving" (`RemainderParams::min_new_share`'s
-/// default). Passes sweeping less are kept in the second round only for kept cells no first-round pass
-/// sweeps, so a lane driven beside an undriven one is not driven again for the few cells its neighbour's
-/// swath already holds.
-const FIRST_ROUND_SHARE: f64 = 0.5;
-
 /// One robot's resumed path.
 #[derive(Debug, Clone)]
 pub struct ResumedPath {
@@ -88,14 +81,19 @@ fn pieces(previous: &[Waypoint], step: f64) -> Vec<Piece> {
 }
 
 /// The resumed path on `space` of a robot at `from` that has reached waypoint `reached` of `previous`, with
-/// `keep` (one flag per grid cell) still to cover. `None` when a link the path needs cannot be found (the
+/// `keep` (one flag per grid cell) still to cover. A piece is kept in the first round when at least
+/// `min_new_share` of the coverable ground its tool sweeps is still to cover: the remainder's own rule for "a
+/// pass worth driving" ([`crate::remainder::RemainderParams::min_new_share`]; pass the value the remainder
+/// was cleaned with). Pieces sweeping less are kept in the second round only for kept cells no kept piece
+/// sweeps, so a lane driven beside an undriven one is not driven again for the few cells its neighbour's
+/// swath already holds. `None` when a link the path needs cannot be found (the
 /// robot cannot get from where it is to what is left, or a piece's ends are no longer valid positions).
 pub fn resume_path(
     space: &CoverageSpace,
     keep: &[bool],
     previous: &[Waypoint],
-    reached: usize,
-    from: Point2,
+    (reached, from): (usize, Point2),
+    min_new_share: f64,
 ) -> Option<ResumedPath> {
     let g = *space.geometry();
     let half = space.robot.tool_width_m / 2.0;
@@ -128,7 +126,7 @@ pub fn resume_path(
             ground += usize::from(space.coverable[i] || keep[i]);
         });
         let kept = cells.len();
-        if kept > 0 && kept as f64 >= FIRST_ROUND_SHARE * ground as f64 && space.segment_ok(a, b) {
+        if kept > 0 && kept as f64 >= min_new_share * ground as f64 && space.segment_ok(a, b) {
             useful[k] = true;
             for &i in &cells {
                 swept[i] = true;
