@@ -13,17 +13,17 @@ use shift_planner::map::grid::OccupancyGrid;
 use shift_planner::pipeline::fleet::{FleetParams, FleetPlan, plan_fleet_monitored};
 use shift_planner::pipeline::remainder::plan_fleet_remainder;
 use shift_planner::pipeline::resume::{FleetResume, Previous, ResumeParams, resume_fleet};
-use shift_planner::pipeline::{NoMonitor, PlanMonitor, PlanParams, Waypoint, WaypointKind};
+use shift_planner::pipeline::{NoMonitor, PlanMonitor, PlanParams, Waypoint};
 use shift_planner::remainder::RemainderParams;
 use shift_planner::space::RobotShape;
 use shift_planner::speed::SpeedLimits;
 use shift_planner::speed::attribute::AttributeMap;
-use shift_proto::{MissionRequest, PlanDocument, WaypointDoc, WaypointKindDoc};
+use shift_proto::{MissionRequest, PlanDocument};
 
 use crate::cell_mask::CellMask;
 use crate::job::{apply_overlay, attribute_map, objective};
 use crate::mission::MissionPlanned;
-use crate::plan_doc::to_document;
+use crate::plan_doc::{to_document, waypoint_from_doc};
 use crate::request::ParsedOptions;
 
 /// One mission to divide and plan.
@@ -180,7 +180,7 @@ fn resume(
         ));
     }
     let paths: Vec<(Vec<Waypoint>, usize)> = (job.previous.iter().flatten())
-        .map(|(doc, reached)| (doc.waypoints.iter().map(planner_waypoint).collect(), *reached))
+        .map(|(doc, reached)| (doc.waypoints.iter().map(waypoint_from_doc).collect(), *reached))
         .collect();
     let previous: Vec<Previous<'_>> = (paths.iter().zip(robots))
         .map(|((path, reached), r)| Previous {
@@ -198,18 +198,6 @@ fn resume(
         attribute,
         &ResumeParams::default(),
     )
-}
-
-/// A plan document's waypoint as the planner's.
-fn planner_waypoint(w: &WaypointDoc) -> Waypoint {
-    Waypoint {
-        position: Point2::new(w.x, w.y),
-        kind: match w.kind {
-            WaypointKindDoc::Cover => WaypointKind::Cover,
-            WaypointKindDoc::Transit => WaypointKind::Transit,
-        },
-        region: w.region,
-    }
 }
 
 /// The outcome of a computed mission: a plan document per part (`compute_ms` is the whole job's time).

@@ -1,6 +1,7 @@
 //! Planner output → the plan document of DESIGN §5.1.
 
-use shift_planner::pipeline::{PlanOutput, WaypointKind};
+use shift_planner::geom::Point2;
+use shift_planner::pipeline::{PlanOutput, Waypoint, WaypointKind};
 use shift_planner::space::CoverageSpace;
 use shift_planner::speed::SpeedProfile;
 use shift_proto::{PlanDocument, PlanMetricsDoc, RegionDoc, WaypointDoc, WaypointKindDoc};
@@ -59,5 +60,17 @@ pub fn to_document(
             coverable_area_m2: Some(space.coverable_area_m2()),
             free_area_m2: Some(space.free_area_m2()),
         },
+    }
+}
+
+/// A plan document's waypoint as the planner's (the inverse of the mapping in [`to_document`], z left out).
+pub fn waypoint_from_doc(w: &WaypointDoc) -> Waypoint {
+    Waypoint {
+        position: Point2::new(w.x, w.y),
+        kind: match w.kind {
+            WaypointKindDoc::Cover => WaypointKind::Cover,
+            WaypointKindDoc::Transit => WaypointKind::Transit,
+        },
+        region: w.region,
     }
 }

@@ -280,7 +280,10 @@ fn resume_bench(name: &str, space: &CoverageSpace, whole: &PlanOutput, repeat: u
         m.length_m,
         m.length_m / unfinished.max(1e-9),
         m.coverage_pct,
-        walked.unswept_cells as f64 * space.geometry().resolution.powi(2),
+        (out.remainder.keep.iter().zip(&walked.swept))
+            .filter(|&(&k, &s)| k && !s)
+            .count() as f64
+            * space.geometry().resolution.powi(2),
         m.collisions,
         out.profile.metrics.collisions,
         profile.metrics.collisions,

@@ -37,7 +37,7 @@ use crate::geom::Point2;
 use crate::map::OccupancyGrid;
 use crate::metrics::coverage::for_each_cell_in_capsule;
 use crate::pattern::PatternMethod;
-use crate::remainder::{RemainderParams, remainder};
+use crate::remainder::{Remainder, RemainderParams, remainder};
 use crate::space::CoverageSpace;
 use crate::speed::attribute::AttributeMap;
 use crate::speed::{SpeedParams, SpeedProfile, profile_path};
@@ -120,6 +120,25 @@ fn resumed_output(
     Ok((output, profile))
 }
 
+/// The replan space of `rem` for the robot of `previous` and its resumed path on it (`None`: see
+/// [`resume_path`]).
+fn resume_on(
+    space: &CoverageSpace,
+    rem: &Remainder,
+    previous: Previous<'_>,
+    remainder_params: &RemainderParams,
+) -> Result<Option<(CoverageSpace, ResumedPath)>> {
+    let rspace = remainder_space(space, rem, previous.from)?;
+    Ok(resume_path(
+        space,
+        &rem.keep,
+        previous.path,
+        (previous.reached, rspace.start),
+        remainder_params.min_new_share,
+    )
+    .map(|path| (rspace, path)))
+}
+
 /// Resumes one robot's plan on `space` given the `covered` flags (one per grid cell): the cleaned remainder
 /// and the resumed path, its metrics counted against the whole remainder. `None` when it cannot be resumed
 /// (see the module docs; the caller plans the remainder instead, [`super::remainder::plan_remainder`]).
@@ -132,14 +151,7 @@ pub fn plan_resume(
     speed: &SpeedParams,
 ) -> Result<Option<(RemainderPlan, ResumedPath)>> {
     let rem = remainder(space, covered, remainder_params)?;
-    let rspace = remainder_space(space, &rem, previous.from)?;
-    let Some(path) = resume_path(
-        space,
-        &rem.keep,
-        previous.path,
-        (previous.reached, rspace.start),
-        remainder_params.min_new_share,
-    ) else {
+    let Some((rspace, path)) = resume_on(space, &rem, previous, remainder_params)? else {
         return Ok(None);
     };
     let (plan, profile) = resumed_output(&rspace, &path, attribute, speed)?;
@@ -192,7 +204,7 @@ pub fn resume_fleet(
     let (mut parts, mut plans, mut remainders) = (Vec::new(), Vec::new(), Vec::new());
     // Robots of one shape standing on one reachable set share a space and a remainder (neither depends on
     // where on it the robot stands).
-    let mut shapes: Vec<(crate::space::RobotShape, CoverageSpace, crate::remainder::Remainder)> = Vec::new();
+    let mut shapes: Vec<(crate::space::RobotShape, CoverageSpace, Remainder)> = Vec::new();
     for (k, (robot, prev)) in robots.iter().zip(previous).enumerate() {
         let on = |s: &CoverageSpace| g.locate(prev.from).is_some_and(|c| s.reachable[g.index(c)]);
         let at = match shapes.iter().position(|(s, space, _)| *s == robot.shape && on(space)) {
@@ -208,14 +220,7 @@ pub fn resume_fleet(
         for (c, &keep) in coverable.iter_mut().zip(&rem.keep) {
             *c |= keep;
         }
-        let mut rspace = remainder_space(space, rem, prev.from)?;
-        let Some(path) = resume_path(
-            space,
-            &rem.keep,
-            prev.path,
-            (prev.reached, rspace.start),
-            remainder_params.min_new_share,
-        ) else {
+        let Some((mut rspace, path)) = resume_on(space, rem, *prev, remainder_params)? else {
             return refused("a robot cannot reach what its plan has left");
         };
         // Its share: the kept cells it sweeps (its metrics count against these).

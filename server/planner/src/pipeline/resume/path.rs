@@ -20,10 +20,9 @@ pub struct ResumedPath {
     pub runs: usize,
     /// Runs from behind the robot (missed earlier) put where they cost least.
     pub inserted: usize,
-    /// Per grid cell: a kept cell this path sweeps.
+    /// Per grid cell: a kept cell this path sweeps (the kept cells it leaves are outside the previous plan's
+    /// swath, or on a piece now blocked).
     pub swept: Vec<bool>,
-    /// Kept cells this path does not sweep (outside the previous plan's swath, or on a piece now blocked).
-    pub unswept_cells: usize,
 }
 
 /// A stretch of segment `seg` of the previous path, from `t0` to `t1` (fractions of the segment).
@@ -156,7 +155,6 @@ pub fn resume_path(
             }
         }
     }
-    let unswept_cells = (0..g.len()).filter(|&i| keep[i] && !swept[i]).count();
 
     // Runs of consecutive useful pieces, each with the previous plan's waypoints inside it.
     let mut runs: Vec<Run> = Vec::new();
@@ -246,7 +244,6 @@ pub fn resume_path(
         runs: order.len(),
         inserted,
         swept,
-        unswept_cells,
     })
 }
 

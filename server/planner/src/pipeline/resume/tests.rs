@@ -155,31 +155,43 @@ fn fleet_robots() -> Vec<FleetRobot> {
         .collect()
 }
 
+/// Each robot's plan on `grid` as it drives it (the profiled waypoints of a fleet plan).
+fn fleet_paths(grid: &OccupancyGrid, robots: &[FleetRobot]) -> Vec<Vec<Waypoint>> {
+    let fleet = plan_fleet(grid, robots, &PlanParams::default(), None, &FleetParams::default()).expect("plans");
+    (fleet.plans.iter())
+        .map(|(_, p)| p.waypoints.iter().map(|w| w.waypoint).collect())
+        .collect()
+}
+
+/// Each path driven for its share of its length (`shares`, in the paths' order): the cells swept, and where
+/// each robot stands on its path.
+fn driven<'a>(g: GridGeometry, paths: &'a [Vec<Waypoint>], shares: &[f64]) -> (Vec<bool>, Vec<Previous<'a>>) {
+    let mut covered = vec![false; g.len()];
+    let mut previous = Vec::new();
+    for (path, share) in paths.iter().zip(shares) {
+        let pts: Vec<Point2> = path.iter().map(|w| w.position).collect();
+        let at = share * polyline_length(&pts);
+        let (swept, rest) = split_at_length(&pts, at);
+        for (c, d) in covered.iter_mut().zip(stamp(g, &swept)) {
+            *c |= d;
+        }
+        previous.push(Previous {
+            path,
+            reached: reached_at(path, at),
+            from: rest[0],
+        });
+    }
+    (covered, previous)
+}
+
 /// A fleet half-way through its plans resumes them (balanced, nothing they held left out), also round a
 /// new obstacle; a fleet whose robots are far apart in progress is divided again.
 #[test]
 fn a_fleet_resumes_its_plans_round_a_new_obstacle_but_not_when_uneven() {
     let grid = room();
     let robots = fleet_robots();
-    let fleet = plan_fleet(&grid, &robots, &PlanParams::default(), None, &FleetParams::default()).expect("plans");
-    let paths: Vec<Vec<Waypoint>> = (fleet.plans.iter())
-        .map(|(_, p)| p.waypoints.iter().map(|w| w.waypoint).collect())
-        .collect();
-    let mut covered = vec![false; grid.geometry.len()];
-    let mut previous = Vec::new();
-    for path in &paths {
-        let pts: Vec<Point2> = path.iter().map(|w| w.position).collect();
-        let half = polyline_length(&pts) / 2.0;
-        let (driven, rest) = split_at_length(&pts, half);
-        for (c, d) in covered.iter_mut().zip(stamp(grid.geometry, &driven)) {
-            *c |= d;
-        }
-        previous.push(Previous {
-            path,
-            reached: reached_at(path, half),
-            from: rest[0],
-        });
-    }
+    let paths = fleet_paths(&grid, &robots);
+    let (covered, previous) = driven(grid.geometry, &paths, &[0.5, 0.5]);
     let params = ResumeParams::default();
     let rp = RemainderParams::default();
     let resumed = match resume_fleet(&grid, &robots, &previous, &covered, &rp, None, &params).expect("plans") {
@@ -235,21 +247,7 @@ fn a_fleet_resumes_its_plans_round_a_new_obstacle_but_not_when_uneven() {
         FleetResume::Refused(why) => panic!("{why}"),
     }
     // Robot 0 nearly done while robot 1 has most of its part left: a new division finishes sooner.
-    let mut uneven = vec![false; grid.geometry.len()];
-    let mut prev = Vec::new();
-    for (path, share) in paths.iter().zip([0.9, 0.1]) {
-        let pts: Vec<Point2> = path.iter().map(|w| w.position).collect();
-        let at = share * polyline_length(&pts);
-        let (driven, rest) = split_at_length(&pts, at);
-        for (c, d) in uneven.iter_mut().zip(stamp(grid.geometry, &driven)) {
-            *c |= d;
-        }
-        prev.push(Previous {
-            path,
-            reached: reached_at(path, at),
-            from: rest[0],
-        });
-    }
+    let (uneven, prev) = driven(grid.geometry, &paths, &[0.9, 0.1]);
     match resume_fleet(&grid, &robots, &prev, &uneven, &rp, None, &params).expect("runs") {
         FleetResume::Refused(why) => assert!(why.contains("the mean"), "{why}"),
         FleetResume::Resumed(r) => panic!("resumed: {:?}", r.fleet.metrics),
@@ -263,25 +261,8 @@ fn robots_of_one_shape_in_rooms_apart_each_resume_in_their_own() {
     let mut grid = room();
     grid.fill_rect(6.9, 0.0, 7.1, 9.0, CellState::Occupied);
     let robots = fleet_robots();
-    let fleet = plan_fleet(&grid, &robots, &PlanParams::default(), None, &FleetParams::default()).expect("plans");
-    let paths: Vec<Vec<Waypoint>> = (fleet.plans.iter())
-        .map(|(_, p)| p.waypoints.iter().map(|w| w.waypoint).collect())
-        .collect();
-    let mut covered = vec![false; grid.geometry.len()];
-    let mut previous = Vec::new();
-    for path in &paths {
-        let pts: Vec<Point2> = path.iter().map(|w| w.position).collect();
-        let half = polyline_length(&pts) / 2.0;
-        let (driven, rest) = split_at_length(&pts, half);
-        for (c, d) in covered.iter_mut().zip(stamp(grid.geometry, &driven)) {
-            *c |= d;
-        }
-        previous.push(Previous {
-            path,
-            reached: reached_at(path, half),
-            from: rest[0],
-        });
-    }
+    let paths = fleet_paths(&grid, &robots);
+    let (covered, previous) = driven(grid.geometry, &paths, &[0.5, 0.5]);
     let rp = RemainderParams::default();
     match resume_fleet(&grid, &robots, &previous, &covered, &rp, None, &ResumeParams::default()).expect("runs") {
         FleetResume::Resumed(r) => {
