@@ -205,21 +205,27 @@ pub fn resume_fleet(
     // Robots of one shape standing on one reachable set share a space and a remainder (neither depends on
     // where on it the robot stands).
     let mut shapes: Vec<(crate::space::RobotShape, CoverageSpace, Remainder)> = Vec::new();
-    for (k, (robot, prev)) in robots.iter().zip(previous).enumerate() {
+    let mut space_of = Vec::with_capacity(robots.len());
+    for (robot, prev) in robots.iter().zip(previous) {
         let on = |s: &CoverageSpace| g.locate(prev.from).is_some_and(|c| s.reachable[g.index(c)]);
         let at = match shapes.iter().position(|(s, space, _)| *s == robot.shape && on(space)) {
             Some(at) => at,
             None => {
                 let space = CoverageSpace::new(grid.clone(), robot.shape, prev.from)?;
                 let rem = remainder(&space, covered, remainder_params)?;
+                for (c, &keep) in coverable.iter_mut().zip(&rem.keep) {
+                    *c |= keep;
+                }
                 shapes.push((robot.shape, space, rem));
                 shapes.len() - 1
             }
         };
+        space_of.push(at);
+    }
+    // One speed law for the whole fleet, over all that is left (as a division's plans get it).
+    let attribute_range = attribute.and_then(|a| a.range_over(&coverable));
+    for (k, ((robot, prev), &at)) in robots.iter().zip(previous).zip(&space_of).enumerate() {
         let (_, space, rem) = &shapes[at];
-        for (c, &keep) in coverable.iter_mut().zip(&rem.keep) {
-            *c |= keep;
-        }
         let Some((mut rspace, path)) = resume_on(space, rem, *prev, remainder_params)? else {
             return refused("a robot cannot reach what its plan has left");
         };
@@ -233,7 +239,10 @@ pub fn resume_fleet(
             }
         }
         rspace.coverable = path.swept.clone();
-        let speed = SpeedParams::new(robot.limits, robot.shape.tool_width_m);
+        let speed = SpeedParams {
+            attribute_range,
+            ..SpeedParams::new(robot.limits, robot.shape.tool_width_m)
+        };
         let (output, profile) = resumed_output(&rspace, &path, attribute, &speed)?;
         let owned = path.swept.iter().filter(|&&s| s).count() as f64 * g.resolution * g.resolution;
         parts.push(crate::divide::Part {

@@ -6,7 +6,7 @@ use crate::pipeline::fleet::{FleetParams, plan_fleet};
 use crate::pipeline::remainder::tests::{SHAPE, room};
 use crate::pipeline::{NoMonitor, remainder::split_at_length};
 use crate::pipeline::{PlanParams, plan_shaped};
-use crate::speed::SpeedLimits;
+use crate::speed::{AttributeBlob, SpeedLimits};
 
 fn stamp(g: GridGeometry, path: &[Point2]) -> Vec<bool> {
     let mut raster = CoverageRaster::new(g, SHAPE.tool_width_m / 2.0);
@@ -271,6 +271,37 @@ fn robots_of_one_shape_in_rooms_apart_each_resume_in_their_own() {
                 assert!(output.points().iter().all(|p| (p.x < 7.0) == left_room));
                 assert!(output.metrics.coverage_pct >= 97.0, "{:?}", output.metrics);
             }
+        }
+        FleetResume::Refused(why) => panic!("{why}"),
+    }
+}
+
+/// With an attribute map every resumed plan gets the fleet's one speed law (over all that is left), as a
+/// division's plans do: not a law of its own share, which would give the robot on clean floor the whole
+/// speed range for a dirt it does not have.
+#[test]
+fn a_fleet_resumed_with_an_attribute_shares_one_speed_law() {
+    let grid = room();
+    let robots = fleet_robots();
+    let paths = fleet_paths(&grid, &robots);
+    let (covered, previous) = driven(grid.geometry, &paths, &[0.5, 0.5]);
+    let blob = AttributeBlob {
+        centre: Point2::new(12.0, 5.0),
+        sigma_m: 1.0,
+        amplitude: 1.0,
+    };
+    let attribute = AttributeMap::from_blobs(grid.geometry, &[blob]).expect("attribute");
+    let params = ResumeParams {
+        max_over_mean: f64::INFINITY,
+        ..ResumeParams::default()
+    };
+    let rp = RemainderParams::default();
+    match resume_fleet(&grid, &robots, &previous, &covered, &rp, Some(&attribute), &params).expect("runs") {
+        FleetResume::Resumed(r) => {
+            let laws: Vec<_> = r.fleet.plans.iter().map(|(_, p)| p.law).collect();
+            assert_eq!(laws[0], laws[1]);
+            let range = attribute.range_over(&r.fleet.division.coverable).expect("range");
+            assert!(range.1 - range.0 > 0.5, "{range:?}");
         }
         FleetResume::Refused(why) => panic!("{why}"),
     }
