@@ -89,10 +89,33 @@ impl Table {
         loads
     }
 
-    /// Lowers weights until every robot keeps its start (`w[j] < w[i] + gap[i][j]` for all i ≠ j, a margin
-    /// of a millimetre); a few Gauss–Seidel passes settle it.
+    /// Moves the weights onto the set where every robot keeps its start (`w[j] < w[i] + gap[i][j]` for all
+    /// i ≠ j, a margin of a millimetre): each violated pair is projected onto its constraint, the two weights
+    /// moving half the excess each (their sum kept), in Gauss–Seidel passes.
+    ///
+    /// Why both move: a robot whose start lies on the border with a neighbour forms a pair with it whose
+    /// border cannot move further, and the pair must move as one, by the sum of both robots' wishes. Lowering
+    /// only the robot whose start is threatened let its neighbour's wish alone drag the pair: a neighbour
+    /// short of work pulled a robot with too much work along, which then could not shed to its other side.
     fn keep_starts(&self, weights: &mut [f64]) {
         let n = weights.len();
+        for _ in 0..4 * n {
+            let mut moved = false;
+            for j in 0..n {
+                for i in (0..n).filter(|&i| i != j) {
+                    let excess = weights[j] - (weights[i] + self.gap[i][j] - 1e-3);
+                    if excess > 0.0 {
+                        weights[j] -= 0.5 * excess;
+                        weights[i] += 0.5 * excess;
+                        moved = true;
+                    }
+                }
+            }
+            if !moved {
+                break;
+            }
+        }
+        // Whatever the passes left (a cycle of tight pairs), the plain cap settles: every start is kept.
         for _ in 0..n {
             let mut moved = false;
             for j in 0..n {

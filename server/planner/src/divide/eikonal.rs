@@ -31,7 +31,12 @@ impl Ord for Key {
 }
 
 /// Travel distance (metres) from cell `start` (whose value is `start_m`, the offset of the real start from
-/// the cell's centre) to every cell of `passable` connected to it through 4-neighbours; infinite elsewhere.
+/// the cell's centre) to every cell of `passable` connected to it through 8-neighbours; infinite elsewhere.
+///
+/// The stencil is the 4-neighbour one; a diagonal step (h√2) is taken only between two cells whose two
+/// common neighbours are both impassable, the corner-to-corner links of ragged real maps that the robots'
+/// reachable sets (8-connected) hold and a 4-neighbour march would leave unreached. Taking every diagonal
+/// would bring back the octagonal facets the module docs warn of.
 pub(super) fn travel_distance(g: &GridGeometry, passable: &[bool], start: usize, start_m: f64) -> Vec<f64> {
     let h = g.resolution;
     let mut dist = vec![f64::INFINITY; g.len()];
@@ -80,6 +85,22 @@ pub(super) fn travel_distance(g: &GridGeometry, passable: &[bool], start: usize,
                 heap.push(Reverse((Key(t), v)));
             }
         }
+        for (dx, dy) in [(-1i64, -1i64), (1, -1), (-1, 1), (1, 1)] {
+            let (vx, vy) = (x as i64 + dx, y as i64 + dy);
+            if vx < 0 || vy < 0 || vx >= w as i64 || vy >= ht as i64 {
+                continue;
+            }
+            let v = vy as usize * w + vx as usize;
+            let (side_a, side_b) = (y * w + vx as usize, vy as usize * w + x);
+            if known[v] || !passable[v] || passable[side_a] || passable[side_b] {
+                continue;
+            }
+            let t = d + h * std::f64::consts::SQRT_2;
+            if t < dist[v] {
+                dist[v] = t;
+                heap.push(Reverse((Key(t), v)));
+            }
+        }
     }
     dist
 }
@@ -120,5 +141,22 @@ mod tests {
         let d = travel_distance(&g, &closed, 0, 0.0);
         assert!(d[12].is_infinite());
         assert!(travel_distance(&g, &closed, 10, 0.0).iter().all(|v| v.is_infinite()));
+    }
+
+    #[test]
+    fn cells_linked_only_corner_to_corner_are_reached_by_a_diagonal_step() {
+        // Two 3 × 3 blocks touching only at one corner: (2, 2) and (3, 3). An 8-connected reachable set
+        // holds both; the march must too, at one diagonal step across the corner.
+        let g = GridGeometry::new(6, 6, 1.0, Point2::origin()).expect("geometry");
+        let pass: Vec<bool> = (0..36).map(|i| (i % 6 < 3) == (i / 6 < 3)).collect();
+        let d = travel_distance(&g, &pass, 0, 0.0);
+        let corner = 2 * 6 + 2;
+        let across = 3 * 6 + 3;
+        assert!((d[across] - d[corner] - std::f64::consts::SQRT_2).abs() < 1e-9, "{} {}", d[corner], d[across]);
+        assert!(d[5 * 6 + 5].is_finite());
+        // In open space no diagonal step is taken: the distance along the diagonal stays the march's.
+        let all = vec![true; 36];
+        let open = travel_distance(&g, &all, 0, 0.0);
+        assert!(open[across] > 3.0 * std::f64::consts::SQRT_2 + 0.1, "{}", open[across]);
     }
 }
