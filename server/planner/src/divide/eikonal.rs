@@ -152,7 +152,12 @@ mod tests {
         let d = travel_distance(&g, &pass, 0, 0.0);
         let corner = 2 * 6 + 2;
         let across = 3 * 6 + 3;
-        assert!((d[across] - d[corner] - std::f64::consts::SQRT_2).abs() < 1e-9, "{} {}", d[corner], d[across]);
+        assert!(
+            (d[across] - d[corner] - std::f64::consts::SQRT_2).abs() < 1e-9,
+            "{} {}",
+            d[corner],
+            d[across]
+        );
         assert!(d[5 * 6 + 5].is_finite());
         // In open space no diagonal step is taken: the distance along the diagonal stays the march's.
         let all = vec![true; 36];
