@@ -201,3 +201,47 @@ pub(super) fn balance(table: &Table, params: &DivideParams) -> (Vec<f64>, bool) 
     let reached = spread(&table.loads(&weights, 1)) <= target;
     (weights, reached)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::Table;
+
+    fn table(gap: Vec<Vec<f64>>) -> Table {
+        Table {
+            cells: Vec::new(),
+            dist: Vec::new(),
+            work: Vec::new(),
+            gap,
+        }
+    }
+
+    #[test]
+    fn a_tight_pair_moves_as_one_keeping_the_sum_of_its_weights() {
+        // Robot 1's start is 5 m further from robot 0 than from itself; weights 0 and 10 would hand it to
+        // robot 0. Both weights move half the excess: the pair keeps the sum of what both robots asked for.
+        let t = table(vec![vec![0.0, 5.0], vec![5.0, 0.0]]);
+        let mut w = vec![0.0, 10.0];
+        t.keep_starts(&mut w);
+        assert!((w[0] + w[1] - 10.0).abs() < 1e-9, "{w:?}");
+        assert!(w[1] < w[0] + 5.0 && w[1] > w[0] + 4.99, "{w:?}");
+    }
+
+    #[test]
+    fn every_start_is_kept_after_the_projection() {
+        // Three robots in a row (gaps 4 and 6 m) with weights far outside the feasible set.
+        let gap = vec![vec![0.0, 4.0, 10.0], vec![4.0, 0.0, 6.0], vec![10.0, 6.0, 0.0]];
+        let t = table(gap.clone());
+        for start in [[0.0, 20.0, -20.0], [30.0, -5.0, 12.0], [-9.0, 0.0, 40.0]] {
+            let mut w = start.to_vec();
+            t.keep_starts(&mut w);
+            for i in 0..3 {
+                for j in (0..3).filter(|&j| j != i) {
+                    assert!(
+                        w[j] < w[i] + gap[i][j],
+                        "{start:?} -> {w:?}: robot {j} loses its start to {i}"
+                    );
+                }
+            }
+        }
+    }
+}

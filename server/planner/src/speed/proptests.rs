@@ -109,5 +109,14 @@ proptest! {
         prop_assert!(accel_ok(&v, &seg, a_max));
         prop_assert_eq!(p.metrics.collisions, 0);
         prop_assert!(p.dwell.dwell_cv <= p.open_loop_dwell_cv + 1e-12);
+        // Time is the objective: the refinement adds at most `extra_time`, and nothing when the open-loop law
+        // is already within the uniformity goal.
+        let open = profile_path(&space, &path, Some(&attr), &SpeedParams { refine_iterations: 0, ..params })
+            .expect("open loop");
+        let (t, t0) = (p.dwell.duration_s, open.dwell.duration_s);
+        prop_assert!(t <= t0 * (1.0 + params.extra_time) * (1.0 + 1e-6), "{t} vs open loop {t0}");
+        if p.open_loop_dwell_cv < super::refine::UNIFORMITY_GOAL * p.dwell.dwell_cv_const_speed - 1e-9 {
+            prop_assert!((t - t0).abs() <= 1e-6 * t0, "{t} vs open loop {t0}");
+        }
     }
 }
