@@ -90,8 +90,9 @@ pub(super) fn extend_to_coverable(fields: &[RobotField], owner: &mut [u32]) {
 /// cells it owns at least `inset_m` (half its tool) from every other part, so that its swath ends at the
 /// boundary instead of sweeping half a tool into the neighbour's part (both neighbours would, and the seam
 /// would be swept twice a tool wide); it gets back the cells near the corners where a wall meets the
-/// boundary (their coverable cells are out of reach of the inset). Where the inset would cut its start off
-/// from some of its part, the part keeps its full extent.
+/// boundary (their coverable cells are out of reach of the inset). Pieces the inset cuts off from its start
+/// are joined back by the shortest way through its own reachable cells (a doorway beside the boundary);
+/// only when that fails does the part keep its full extent.
 pub(super) fn part_masks(
     space: &CoverageSpace,
     start_cell: Cell,
@@ -128,7 +129,38 @@ pub(super) fn part_masks(
     }
     let connected = flood_fill8(g, &keep, start_cell);
     if keep.iter().zip(&connected).all(|(k, c)| k == c) {
-        (keep, cover)
+        return (keep, cover);
+    }
+    // Pieces the inset cut off from the start (a cell or two behind an obstacle's corner, most often) are
+    // joined back by the shortest way through the part's own reachable cells: the centre may leave the inset
+    // there and nowhere else (before, one such cell gave the whole part its full extent, and its swath half a
+    // tool into every neighbour).
+    let passable: Vec<bool> = (0..g.len()).map(|i| own[i] && space.reachable[i]).collect();
+    let mut joined = connected;
+    let mut parent = vec![usize::MAX; g.len()];
+    let mut queue: VecDeque<usize> = (0..g.len()).filter(|&i| joined[i]).collect();
+    let mut seen = joined.clone();
+    while let Some(i) = queue.pop_front() {
+        for n in g.neighbors8(g.cell(i)) {
+            let j = g.index(n);
+            if seen[j] || !passable[j] {
+                continue;
+            }
+            seen[j] = true;
+            parent[j] = i;
+            if keep[j] {
+                // A cut-off cell: keep the way back to the joined set.
+                let mut k = j;
+                while k != usize::MAX && !joined[k] {
+                    joined[k] = true;
+                    k = parent[k];
+                }
+            }
+            queue.push_back(j);
+        }
+    }
+    if keep.iter().zip(&joined).all(|(k, j)| !k || *j) {
+        (joined, cover)
     } else {
         (own, cover)
     }

@@ -257,3 +257,41 @@ proptest! {
         check_invariants(&div, &robots);
     }
 }
+
+#[test]
+fn a_doorway_beside_the_boundary_keeps_the_part_connected_and_the_inset_elsewhere() {
+    // Robot 0 owns x < 2 m of a 4 m × 2 m room, robot 1 the rest. A wall at y = 1 m runs from the left wall
+    // to x = 1.8 m: the lower half of robot 0's part is entered by a doorway beside the boundary, inside the
+    // half-tool inset. The part stays connected, and keeps the inset everywhere but near that doorway.
+    let mut grid = room(4.0, 2.0);
+    grid.fill_rect(0.0, 1.0, 1.8, 1.1, CellState::Occupied);
+    let g = grid.geometry;
+    let shape = RobotShape {
+        radius_m: 0.15,
+        tool_width_m: 0.3,
+    };
+    let space = CoverageSpace::new(grid, shape, Point2::new(0.5, 1.5)).expect("space");
+    let owner: Vec<u32> = (0..g.len())
+        .map(|i| {
+            if !space.reachable[i] && !space.coverable[i] {
+                NO_OWNER
+            } else if g.center_of(i).x < 2.0 {
+                0
+            } else {
+                1
+            }
+        })
+        .collect();
+    let (keep, _) = ownership::part_masks(&space, space.start_cell, &owner, 0, 1, shape.tool_width_m / 2.0);
+    let reached = flood_fill8(&g, &keep, space.start_cell);
+    assert_eq!(keep, reached, "the part's reachable mask is connected from its start");
+    let at = |x: f64, y: f64| keep[g.index(g.locate(Point2::new(x, y)).expect("on the map"))];
+    assert!(at(0.5, 0.5), "the lower half is kept");
+    assert!(at(1.95, 1.05), "the doorway is passable");
+    for y in [0.3, 0.5, 1.5, 1.7] {
+        assert!(
+            !at(1.95, y),
+            "the inset holds at y = {y} (the centre stays half a tool from robot 1's part)"
+        );
+    }
+}
