@@ -262,7 +262,7 @@ pub fn divide_within(
     let coverable: Vec<bool> = (0..g.len())
         .map(|i| only.is_none_or(|o| o[i]) && fields.iter().any(|f| f.space.coverable[i]))
         .collect();
-    let work = work::Work::new(robots, calibration, cell_area, attribute, &coverable);
+    let work = work::Work::new(robots, calibration, &g, attribute, &coverable);
     let table = balance::Table::new(&fields, &work);
     let (weights, balanced) = balance::balance(&table, params);
     let mut warnings = Vec::new();
