@@ -148,7 +148,8 @@ fn spread(loads: &[f64]) -> f64 {
 /// schedule (a quarter of the distance scale over √(iteration + 1)): where a room toggles between two
 /// robots at every step, halving alone froze every weight within a few dozen iterations, while a third
 /// robot's steady excess (a neighbour's weight dragged along by the toggling) still needed hundreds of
-/// small steps to drain (a corridor site with four docks stuck at 1.19 reached 1.08 with the floor).
+/// small steps to drain (a corridor site with four docks stuck at an expected-load ratio of 1.19 reached
+/// 1.08 with the floor).
 pub(super) fn balance(table: &Table, params: &DivideParams) -> (Vec<f64>, bool) {
     let n = table.dist.len();
     let mut weights = vec![0.0; n];

@@ -11,8 +11,8 @@ use crate::speed::dwell::DwellLaw;
 /// calibration.
 ///
 /// **Turns.** A lane ends in a U-turn: two sharp corners, each slowed to a stop and accelerated back, which
-/// costs about 2·v/a seconds over driving on at v (each of the four ramps takes v/a seconds for v/(2a) of
-/// distance). A lane of length L a tool w wide sweeps L·w, so per cell of area A the turns add
+/// costs about 2·v/a seconds over driving on at v (each of the four ramps takes v/a seconds for v²/(2a) of
+/// distance, which at v would take v/(2a): each loses v/(2a)). A lane of length L a tool w wide sweeps L·w, so per cell of area A the turns add
 /// (2·v/a)·A/(w·L) to the lane's A/(w·v): a factor 1 + 2·v²/(a·L). L is the longer straight run of
 /// coverable cells through the cell, along the rows or the columns (lanes follow the longer way; at least a
 /// tool width). In an open hall (L of tens of metres) the factor is near 1; between shelves and on a ragged
