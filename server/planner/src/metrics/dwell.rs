@@ -51,27 +51,38 @@ pub fn evaluate_dwell(
         })
         .collect();
     let duration_s: f64 = durations.iter().sum();
-    let length: f64 = seg.iter().sum();
     let on = |k: usize| working.get(k).copied().unwrap_or(true);
     let deposited: Vec<f64> = durations
         .iter()
         .enumerate()
         .map(|(k, d)| if on(k) { *d } else { 0.0 })
         .collect();
-    let cv = dwell_cv(space, points, &deposited, attribute, attribute_floor);
-    let const_durations: Vec<f64> = if length > 0.0 {
-        seg.iter()
-            .enumerate()
-            .map(|(k, s)| if on(k) { s / length * duration_s } else { 0.0 })
-            .collect()
-    } else {
-        vec![0.0; seg.len()]
-    };
     DwellMetrics {
-        dwell_cv: cv,
-        dwell_cv_const_speed: dwell_cv(space, points, &const_durations, attribute, attribute_floor),
+        dwell_cv: dwell_cv(space, points, &deposited, attribute, attribute_floor),
+        dwell_cv_const_speed: constant_speed_cv(space, points, working, attribute, attribute_floor),
         duration_s,
     }
+}
+
+/// Dwell CV of `points` driven at one constant speed (the CV does not depend on the speed, so each working
+/// segment deposits its length); `working` as in [`evaluate_dwell`].
+pub fn constant_speed_cv(
+    space: &CoverageSpace,
+    points: &[Point2],
+    working: &[bool],
+    attribute: &AttributeMap,
+    attribute_floor: f64,
+) -> f64 {
+    let durations: Vec<f64> = (points.windows(2).enumerate())
+        .map(|(k, w)| {
+            if working.get(k).copied().unwrap_or(true) {
+                (w[1] - w[0]).norm()
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    dwell_cv(space, points, &durations, attribute, attribute_floor)
 }
 
 /// CV over coverable cells of deposit / max(A, floor) for segment durations `durations` (seconds; zero for

@@ -25,7 +25,7 @@ pub use samples::PathSamples;
 
 use crate::error::{PlannerError, Result};
 use crate::geom::Point2;
-use crate::metrics::dwell::{DwellMetrics, evaluate_dwell};
+use crate::metrics::dwell::DwellMetrics;
 use crate::metrics::{PlanMetrics, evaluate};
 use crate::pipeline::Waypoint;
 use crate::smooth::{SmoothParams, SmoothedPath, round_corners_where};
@@ -216,20 +216,18 @@ pub fn profile_path_where(
             params.refine_iterations,
             params.extra_time,
         );
-        let speeds = refined.speeds_mps;
-        let dwell = evaluate_dwell(
-            space,
-            &samples.points,
-            &speeds,
-            &samples.working,
-            attribute,
-            metric_floor,
-        );
-        (speeds, dwell, refined.open_loop_cv)
+        // The refinement simulated the kept speeds' deposit and the constant-speed one on these samples, as
+        // `metrics::dwell::evaluate_dwell` would (a test holds them equal); the duration is filled in below.
+        let dwell = DwellMetrics {
+            dwell_cv: refined.dwell_cv,
+            dwell_cv_const_speed: refined.constant_speed_cv,
+            duration_s: 0.0,
+        };
+        (refined.speeds_mps, dwell, refined.open_loop_cv)
     } else {
         // No attribute map: the fastest profile the limits allow, and no uniformity figures (DESIGN §6 defines
         // dwell CV against an attribute map; against A = 1 it would cost deposit fields over the whole grid
-        // for a figure nobody reads). The duration is filled in below.
+        // for a figure nobody reads).
         let speeds = refine::capped_speeds(&samples, &targets, limits.a_max_mps2);
         let dwell = DwellMetrics {
             dwell_cv: f64::NAN,
@@ -239,13 +237,9 @@ pub fn profile_path_where(
         (speeds, dwell, f64::NAN)
     };
     let t = time_param::times(&speeds, &samples.seg);
-    let dwell = if has_attribute {
-        dwell
-    } else {
-        DwellMetrics {
-            duration_s: t.last().copied().unwrap_or(0.0),
-            ..dwell
-        }
+    let dwell = DwellMetrics {
+        duration_s: t.last().copied().unwrap_or(0.0),
+        ..dwell
     };
     Ok(SpeedProfile {
         waypoints: timed(&samples, &speeds, &t),

@@ -3,9 +3,10 @@
 use proptest::prelude::*;
 
 use super::time_param::{limit_acceleration, times};
-use super::{AttributeBlob, AttributeMap, DwellLaw, SpeedLimits, SpeedParams, profile_path};
+use super::{AttributeBlob, AttributeMap, DwellLaw, SpeedLimits, SpeedParams, metric_attribute_floor, profile_path};
 use crate::geom::Point2;
 use crate::map::{CellState, GridGeometry, OccupancyGrid};
+use crate::metrics::dwell::evaluate_dwell;
 use crate::pipeline::{Waypoint, WaypointKind};
 use crate::space::{CoverageSpace, RobotShape};
 
@@ -118,5 +119,14 @@ proptest! {
         if p.open_loop_dwell_cv < super::refine::UNIFORMITY_GOAL * p.dwell.dwell_cv_const_speed - 1e-9 {
             prop_assert!((t - t0).abs() <= 1e-6 * t0, "{t} vs open loop {t0}");
         }
+        // The figures the profile takes over from the refinement are the metric's own, recomputed from the
+        // timed waypoints.
+        let working: Vec<bool> = p.waypoints[1..].iter().map(|w| w.waypoint.kind == WaypointKind::Cover).collect();
+        let a_hi = attr.range_over(&space.coverable).map_or(1.0, |r| r.1);
+        let again = evaluate_dwell(&space, &p.points(), &v, &working, &attr, metric_attribute_floor(a_hi, &limits));
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1e-12);
+        prop_assert!(close(again.dwell_cv, p.dwell.dwell_cv), "{again:?} vs {:?}", p.dwell);
+        prop_assert!(close(again.dwell_cv_const_speed, p.dwell.dwell_cv_const_speed), "{again:?} vs {:?}", p.dwell);
+        prop_assert!(close(again.duration_s, p.dwell.duration_s), "{again:?} vs {:?}", p.dwell);
     }
 }

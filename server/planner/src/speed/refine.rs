@@ -9,7 +9,7 @@
 //! in [v_min, v_max], and the acceleration pass runs after every step. The iterate with the lowest dwell CV
 //! (metrics::dwell::field_cv) is kept, so refinement never makes the plan worse than the open-loop law.
 
-use crate::metrics::dwell::field_cv;
+use crate::metrics::dwell::{constant_speed_cv, field_cv};
 use crate::space::CoverageSpace;
 
 use super::AttributeMap;
@@ -32,6 +32,8 @@ pub struct Refined {
     pub speeds_mps: Vec<f64>,
     /// Dwell CV of the kept iterate.
     pub dwell_cv: f64,
+    /// Dwell CV of the same path at constant speed ([`constant_speed_cv`]).
+    pub constant_speed_cv: f64,
     /// Dwell CV of iteration 0 (the open-loop law).
     pub open_loop_cv: f64,
     /// Index of the kept iterate (0 = open loop).
@@ -73,16 +75,6 @@ impl Simulator<'_> {
         let deposit = deposit_field(g, &self.samples.points, &durations, self.space.robot.tool_width_m / 2.0);
         let cv = field_cv(self.space, &deposit, self.attribute, self.floor);
         Simulated { speeds, deposit, cv }
-    }
-
-    /// Dwell CV of the path driven at one constant speed (its scale does not matter).
-    fn constant_speed_cv(&self) -> f64 {
-        let durations: Vec<f64> = (self.samples.seg.iter().enumerate())
-            .map(|(k, s)| if self.samples.working[k] { *s } else { 0.0 })
-            .collect();
-        let g = self.space.geometry();
-        let deposit = deposit_field(g, &self.samples.points, &durations, self.space.robot.tool_width_m / 2.0);
-        field_cv(self.space, &deposit, self.attribute, self.floor)
     }
 }
 
@@ -137,10 +129,12 @@ pub fn refine(
     let mut current = sim.run(&targets);
     let open_loop_cv = current.cv;
     let open_loop_s = duration(samples, &current.speeds);
-    let cv_goal = UNIFORMITY_GOAL * sim.constant_speed_cv();
+    let constant_cv = constant_speed_cv(space, &samples.points, &samples.working, attribute, metric_floor);
+    let cv_goal = UNIFORMITY_GOAL * constant_cv;
     let mut best = Refined {
         speeds_mps: current.speeds.clone(),
         dwell_cv: current.cv,
+        constant_speed_cv: constant_cv,
         open_loop_cv,
         kept_iteration: 0,
     };
@@ -193,6 +187,7 @@ pub fn refine(
             best = Refined {
                 speeds_mps: current.speeds.clone(),
                 dwell_cv: current.cv,
+                constant_speed_cv: constant_cv,
                 open_loop_cv,
                 kept_iteration: it,
             };

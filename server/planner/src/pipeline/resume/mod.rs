@@ -204,11 +204,14 @@ pub fn resume_fleet(
     let (mut parts, mut plans, mut remainders) = (Vec::new(), Vec::new(), Vec::new());
     // Robots of one shape standing on one reachable set share a space and a remainder (neither depends on
     // where on it the robot stands).
-    let mut shapes: Vec<(crate::space::RobotShape, CoverageSpace, Remainder)> = Vec::new();
+    let mut spaces: Vec<(CoverageSpace, Remainder)> = Vec::new();
     let mut space_of = Vec::with_capacity(robots.len());
     for (robot, prev) in robots.iter().zip(previous) {
         let on = |s: &CoverageSpace| g.locate(prev.from).is_some_and(|c| s.reachable[g.index(c)]);
-        let at = match shapes.iter().position(|(s, space, _)| *s == robot.shape && on(space)) {
+        let at = match spaces
+            .iter()
+            .position(|(space, _)| space.robot == robot.shape && on(space))
+        {
             Some(at) => at,
             None => {
                 let space = CoverageSpace::new(grid.clone(), robot.shape, prev.from)?;
@@ -216,8 +219,8 @@ pub fn resume_fleet(
                 for (c, &keep) in coverable.iter_mut().zip(&rem.keep) {
                     *c |= keep;
                 }
-                shapes.push((robot.shape, space, rem));
-                shapes.len() - 1
+                spaces.push((space, rem));
+                spaces.len() - 1
             }
         };
         space_of.push(at);
@@ -225,7 +228,7 @@ pub fn resume_fleet(
     // One speed law for the whole fleet, over all that is left (as a division's plans get it).
     let attribute_range = attribute.and_then(|a| a.range_over(&coverable));
     for (k, ((robot, prev), &at)) in robots.iter().zip(previous).zip(&space_of).enumerate() {
-        let (_, space, rem) = &shapes[at];
+        let (space, rem) = &spaces[at];
         let Some((mut rspace, path)) = resume_on(space, rem, *prev, remainder_params)? else {
             return refused("a robot cannot reach what its plan has left");
         };
@@ -276,8 +279,8 @@ pub fn resume_fleet(
         if raw as f64 <= bound {
             raw
         } else {
-            (shapes.iter())
-                .map(|(_, space, _)| remainder(space, &done, remainder_params).map(|r| r.kept_cells))
+            (spaces.iter())
+                .map(|(space, _)| remainder(space, &done, remainder_params).map(|r| r.kept_cells))
                 .sum::<Result<usize>>()?
         }
     };
