@@ -12,13 +12,13 @@ use shift_planner::geom::Point2;
 use shift_planner::map::grid::OccupancyGrid;
 use shift_planner::pipeline::fleet::{FleetParams, FleetPlan, plan_fleet_monitored};
 use shift_planner::pipeline::remainder::plan_fleet_remainder;
-use shift_planner::pipeline::resume::{FleetResume, Previous, ResumeParams, resume_fleet};
+use shift_planner::pipeline::resume::{FleetResume, Lost, Previous, ResumeParams, resume_fleet};
 use shift_planner::pipeline::{NoMonitor, PlanMonitor, PlanParams, Waypoint};
 use shift_planner::remainder::RemainderParams;
 use shift_planner::space::RobotShape;
 use shift_planner::speed::SpeedLimits;
 use shift_planner::speed::attribute::AttributeMap;
-use shift_proto::{MissionRequest, PlanDocument};
+use shift_proto::{MissionRequest, MissionRobot, PlanDocument};
 
 use crate::cell_mask::CellMask;
 use crate::job::{apply_overlay, attribute_map, objective};
@@ -46,12 +46,26 @@ pub struct MissionJob {
     /// robot from its `start` (where it is now).
     pub covered: Option<Arc<Vec<bool>>>,
     /// A replan: per robot (in the request's order), the plan it is driving and the last waypoint it reached
-    /// on it (empty when a robot was lost with its part unfinished). When every robot has one, the job first
-    /// tries to resume them
+    /// on it (empty when a robot lost with its part unfinished left no plan at hand to hand over). When every
+    /// robot has one, the job first tries to resume them
     /// ([`shift_planner::pipeline::resume`]): cheaper by far than a new division, and the robots keep the
     /// paths they were driving; it divides the remainder again when resuming would leave ground out or
     /// finish later.
     pub previous: Vec<Option<(Arc<PlanDocument>, usize)>>,
+    /// A replan: the robots lost with their plans unfinished, each with the plan it was driving; resuming
+    /// hands their lanes to the others ([`shift_planner::pipeline::resume::Lost`]).
+    pub lost: Vec<LostPlan>,
+}
+
+/// A robot lost with its plan unfinished (see [`MissionJob::lost`]).
+#[derive(Debug, Clone)]
+pub struct LostPlan {
+    /// The robot as the mission holds it.
+    pub robot: MissionRobot,
+    /// The plan it was driving.
+    pub doc: Arc<PlanDocument>,
+    /// The last waypoint it reached on it.
+    pub reached: usize,
 }
 
 /// One robot's planned part.
@@ -96,19 +110,7 @@ pub fn run_mission_job_monitored(job: &MissionJob, monitor: &mut dyn PlanMonitor
     let mut grid = (*job.grid).clone();
     let res = grid.geometry.resolution;
     let robots: Vec<FleetRobot> = (job.request.robots.iter())
-        .map(|r| {
-            // A footprint plans in the space of its inscribed planning radius (as a single plan does).
-            let footprint = r.footprint.as_deref().map(Footprint::new).transpose()?;
-            Ok(FleetRobot {
-                start: Point2::new(r.start[0], r.start[1]),
-                shape: RobotShape {
-                    radius_m: footprint.as_ref().map_or(r.radius, |f| f.planning_radius_m(res)),
-                    tool_width_m: r.tool_width,
-                },
-                limits: SpeedLimits::new(r.v_min, r.v_max, r.a_max),
-                footprint,
-            })
-        })
+        .map(|r| fleet_robot(r, res))
         .collect::<shift_planner::Result<_>>()?;
     if !job.overlay.is_empty() {
         // The live overlay must not block any dock (another robot standing there was seen by its neighbours).
@@ -165,7 +167,23 @@ pub fn run_mission_job_monitored(job: &MissionJob, monitor: &mut dyn PlanMonitor
     }
 }
 
-/// The robots' plans resumed (see [`MissionJob::previous`]), or why the remainder is to be divided.
+/// The planner's view of a mission robot; a footprint plans in the space of its inscribed planning radius (as
+/// a single plan does) on a grid of `resolution` metres.
+fn fleet_robot(r: &MissionRobot, resolution: f64) -> shift_planner::Result<FleetRobot> {
+    let footprint = r.footprint.as_deref().map(Footprint::new).transpose()?;
+    Ok(FleetRobot {
+        start: Point2::new(r.start[0], r.start[1]),
+        shape: RobotShape {
+            radius_m: footprint.as_ref().map_or(r.radius, |f| f.planning_radius_m(resolution)),
+            tool_width_m: r.tool_width,
+        },
+        limits: SpeedLimits::new(r.v_min, r.v_max, r.a_max),
+        footprint,
+    })
+}
+
+/// The robots' plans resumed (see [`MissionJob::previous`]), the lost robots' lanes handed over
+/// ([`MissionJob::lost`]), or why the remainder is to be divided.
 fn resume(
     job: &MissionJob,
     grid: &OccupancyGrid,
@@ -175,7 +193,7 @@ fn resume(
 ) -> shift_planner::Result<FleetResume> {
     if job.previous.len() != robots.len() || job.previous.iter().any(Option::is_none) {
         return Ok(FleetResume::Refused(
-            "not resumed: the fleet changed (a robot lost with its part unfinished, or one without a plan of the mission)"
+            "not resumed: the fleet changed (a robot lost with its plan not at hand, or one without a plan of the mission)"
                 .into(),
         ));
     }
@@ -189,10 +207,31 @@ fn resume(
             from: r.start,
         })
         .collect();
+    let lost_robots: Vec<FleetRobot> = (job.lost.iter())
+        .map(|l| fleet_robot(&l.robot, grid.geometry.resolution))
+        .collect::<shift_planner::Result<_>>()?;
+    let lost_paths: Vec<Vec<Waypoint>> = (job.lost.iter())
+        .map(|l| l.doc.waypoints.iter().map(waypoint_from_doc).collect())
+        .collect();
+    let lost: Vec<Lost<'_>> = (job.lost.iter().zip(&lost_robots).zip(&lost_paths))
+        .filter(|(_, path)| !path.is_empty())
+        .map(|((l, robot), path)| {
+            let at = l.reached.min(path.len() - 1);
+            Lost {
+                robot,
+                previous: Previous {
+                    path,
+                    reached: at,
+                    // Its lanes are handed over from where it was on its plan (its last pose may be off it).
+                    from: path[at].position,
+                },
+            }
+        })
+        .collect();
     resume_fleet(
         grid,
         robots,
-        &previous,
+        (&previous, &lost),
         covered,
         &RemainderParams::default(),
         attribute,

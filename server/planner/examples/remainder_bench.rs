@@ -251,7 +251,7 @@ fn resume_bench(name: &str, space: &CoverageSpace, whole: &PlanOutput, repeat: u
     let fleet = resume_fleet(
         &space.grid,
         &[robot],
-        &[previous],
+        (&[previous], &[]),
         raster.covered(),
         &RemainderParams::default(),
         None,

@@ -199,6 +199,7 @@ impl Engine {
                     overlay: Vec::new(),
                     covered: None,
                     previous: Vec::new(),
+                    lost: Vec::new(),
                 })));
                 let plan_ids = m.record.plan_ids.clone();
                 for id in plan_ids {

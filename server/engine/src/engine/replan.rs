@@ -12,7 +12,7 @@ use shift_proto::{MissionRobot, MissionStatus, PlanEvent, PlanStatus, WatchHealt
 use super::{Command, Engine};
 use crate::error::{EngineError, Result};
 use crate::mission::{MissionPlanned, ReplanOrder};
-use crate::mission_job::{MissionJob, PlannedPart};
+use crate::mission_job::{LostPlan, MissionJob, PlannedPart};
 use crate::plan::PlanRecord;
 use crate::request::ParsedOptions;
 use crate::robots::Assignment;
@@ -238,16 +238,40 @@ impl Engine {
         if request.robots.is_empty() {
             return;
         }
-        // A robot lost with its plan unfinished leaves ground only a new division gives out: no resume.
+        // A robot lost with its plan unfinished: the plan it was driving and where it was on it, so that its
+        // lanes go to the others with their own plans resumed; without that plan (not driving it when lost),
+        // only a new division gives its ground out.
         let unfinished = |plan_id: &String| {
             self.plans
                 .get(plan_id)
                 .is_some_and(|p| matches!(p.status, PlanStatus::Active | PlanStatus::Ready))
         };
-        let lost_unfinished = (m.record.plan_ids.iter().zip(&m.record.request.robots))
-            .any(|(plan_id, r)| lost.contains(&r.id) && unfinished(plan_id));
-        if lost_unfinished {
+        let mut lost_plans = Vec::new();
+        let mut whole = true;
+        for (plan_id, r) in m.record.plan_ids.iter().zip(&m.record.request.robots) {
+            if !(lost.contains(&r.id) && unfinished(plan_id)) {
+                continue;
+            }
+            let fraction = self.plans.get(plan_id).map_or(0.0, |p| p.driven_fraction);
+            let driving = (self.robots.get(&r.id))
+                .and_then(|x| x.assignment.as_ref())
+                .filter(|a| a.plan_id == *plan_id && !a.doc.waypoints.is_empty());
+            match driving {
+                Some(a) => {
+                    let total = a.arc_m.last().copied().unwrap_or(0.0);
+                    let at = a.arc_m.partition_point(|&s| s < fraction * total).max(a.index);
+                    lost_plans.push(LostPlan {
+                        robot: r.clone(),
+                        doc: a.doc.clone(),
+                        reached: at.min(a.doc.waypoints.len() - 1),
+                    });
+                }
+                None => whole = false,
+            }
+        }
+        if !whole {
             previous.clear();
+            lost_plans.clear();
         }
         let covered = Arc::new(raster.covered().to_vec());
         let grid = site.map.grid.clone();
@@ -270,6 +294,7 @@ impl Engine {
             overlay: Vec::new(),
             covered: Some(covered),
             previous,
+            lost: lost_plans,
         })));
     }
 

@@ -162,7 +162,15 @@ fn a_robot_lost_part_way_hands_its_rest_to_the_other_who_finishes_the_mission() 
     );
     // r1 drives on while it computes; the replan's end gives r1 version 2 from where it stands.
     let t = drive(&mut e, &[("r1", poses(&docs[0].1, 0.3, 0.35))], t + 20);
+    assert_eq!(job.lost.len(), 1, "r2's plan goes with the job");
+    assert_eq!(job.lost[0].doc.plan_id, "p-3");
     let fleet = run_mission_job(&job).expect("replans the remainder");
+    // r1's plan resumed and r2's unfinished lanes handed to it: no new division.
+    assert!(
+        fleet.division.warnings.iter().any(|w| w.contains("handed over")),
+        "{:?}",
+        fleet.division.warnings
+    );
     let c = e
         .handle(
             Event::MissionFinished {

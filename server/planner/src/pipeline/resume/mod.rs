@@ -24,10 +24,12 @@
 //! would finish sooner: the longest over [`ResumeParams::max_over_mean`] times the mean (a division can at
 //! best give every robot the mean; the balance bar is 1.15).
 
+mod handover;
 mod path;
 #[cfg(test)]
 mod tests;
 
+pub use handover::Lost;
 pub use path::{ResumedPath, resume_path};
 
 use crate::decompose::DecompositionMethod;
@@ -178,13 +180,15 @@ pub enum FleetResume {
 /// Resumes every robot's plan on `grid` (see the module docs), or says why the fleet's remainder is better
 /// divided again. `robots[k].start` is ignored (each robot starts where `previous[k]` says it is).
 ///
-/// The caller's part: `previous` holds the plans of *every* robot whose plan shares the remainder. A robot
-/// lost with its plan unfinished, or one joining without a plan, changes the fleet, and its part is for a
-/// new division (this function cannot see a plan it is not given).
+/// The caller's part: `previous` holds the plans of *every* robot that goes on, and `lost` those of the robots
+/// lost with their plans unfinished: their work is handed over to the robots of their shape
+/// ([`handover`]). A robot joining without a plan changes the fleet the other way; its share is for a new
+/// division (this function cannot see a plan it is not given). The ground of a lost plan not given here
+/// counts as ground the resumed paths no longer sweep.
 pub fn resume_fleet(
     grid: &OccupancyGrid,
     robots: &[FleetRobot],
-    previous: &[Previous<'_>],
+    (previous, lost): (&[Previous<'_>], &[Lost<'_>]),
     covered: &[bool],
     remainder_params: &RemainderParams,
     attribute: Option<&AttributeMap>,
@@ -194,7 +198,11 @@ pub fn resume_fleet(
     if robots.is_empty() || robots.len() != previous.len() {
         return refused("a robot has no plan to resume");
     }
-    if robots.iter().any(|r| r.footprint.is_some()) {
+    if robots
+        .iter()
+        .chain(lost.iter().map(|l| l.robot))
+        .any(|r| r.footprint.is_some())
+    {
         return refused("a robot has a footprint");
     }
     let g = grid.geometry;
@@ -227,34 +235,73 @@ pub fn resume_fleet(
     }
     // One speed law for the whole fleet, over all that is left (as a division's plans get it).
     let attribute_range = attribute.and_then(|a| a.range_over(&coverable));
-    for (k, ((robot, prev), &at)) in robots.iter().zip(previous).zip(&space_of).enumerate() {
+    let speed_of = |robot: &FleetRobot| SpeedParams {
+        attribute_range,
+        ..SpeedParams::new(robot.limits, robot.shape.tool_width_m)
+    };
+    let mut resumed: Vec<(CoverageSpace, ResumedPath)> = Vec::with_capacity(robots.len());
+    for (prev, &at) in previous.iter().zip(&space_of) {
         let (space, rem) = &spaces[at];
-        let Some((mut rspace, path)) = resume_on(space, rem, *prev, remainder_params)? else {
+        let Some((rspace, path)) = resume_on(space, rem, *prev, remainder_params)? else {
             return refused("a robot cannot reach what its plan has left");
         };
-        // Its share: the kept cells it sweeps (its metrics count against these).
         for (i, &s) in path.swept.iter().enumerate() {
-            if s {
+            swept_any[i] |= s;
+        }
+        resumed.push((rspace, path));
+    }
+    let profile_of = |k: usize, (rspace, path): &(CoverageSpace, ResumedPath)| {
+        // Its share: the kept cells it sweeps (its metrics count against these).
+        let mut rspace = rspace.clone();
+        rspace.coverable = path.swept.clone();
+        resumed_output(&rspace, path, attribute, &speed_of(&robots[k])).map(|out| (rspace, out))
+    };
+    let mut profiled = (resumed.iter().enumerate())
+        .map(|(k, r)| profile_of(k, r))
+        .collect::<Result<Vec<_>>>()?;
+    let mut handed_m2 = 0.0;
+    for l in lost {
+        let durations_s: Vec<f64> = profiled.iter().map(|(_, (_, p))| p.dwell.duration_s).collect();
+        let view = handover::Resumed {
+            paths: &mut resumed,
+            durations_s: &durations_s,
+            space_of: &space_of,
+            robots,
+        };
+        // The lost plan's chain is timed on its own profile.
+        let chain_profile = |rspace: &CoverageSpace, path: &ResumedPath| {
+            resumed_output(rspace, path, attribute, &speed_of(l.robot)).map(|(_, profile)| profile)
+        };
+        let cells = match handover::hand_over(l, &spaces, view, &swept_any, remainder_params, chain_profile)? {
+            Ok(cells) => cells,
+            Err(why) => return refused(&why),
+        };
+        for (k, taken) in cells.into_iter().enumerate() {
+            if taken.is_empty() {
+                continue;
+            }
+            for &i in &taken {
                 swept_any[i] = true;
-                if owner[i] == NO_OWNER {
-                    owner[i] = k as u32;
-                }
+                resumed[k].1.swept[i] = true;
+            }
+            handed_m2 += taken.len() as f64 * g.resolution * g.resolution;
+            profiled[k] = profile_of(k, &resumed[k])?;
+        }
+    }
+    for (k, (rspace, (output, profile))) in profiled.into_iter().enumerate() {
+        for (i, &s) in rspace.coverable.iter().enumerate() {
+            if s && owner[i] == NO_OWNER {
+                owner[i] = k as u32;
             }
         }
-        rspace.coverable = path.swept.clone();
-        let speed = SpeedParams {
-            attribute_range,
-            ..SpeedParams::new(robot.limits, robot.shape.tool_width_m)
-        };
-        let (output, profile) = resumed_output(&rspace, &path, attribute, &speed)?;
-        let owned = path.swept.iter().filter(|&&s| s).count() as f64 * g.resolution * g.resolution;
+        let owned = rspace.coverable.iter().filter(|&&s| s).count() as f64 * g.resolution * g.resolution;
         parts.push(crate::divide::Part {
             space: rspace,
             load_s: profile.dwell.duration_s,
             owned_area_m2: owned,
         });
         plans.push((output, profile));
-        remainders.push(rem.clone());
+        remainders.push(spaces[space_of[k]].1.clone());
     }
     // What the previous paths swept but no resumed path sweeps (pieces a live obstacle now blocks, stretches
     // out of reach), cleaned by the remainder's own rule. Ground outside every previous path's swath is not
@@ -268,7 +315,8 @@ pub fn resume_fleet(
         unswept
     } else {
         let mut held = vec![false; g.len()];
-        for (robot, prev) in robots.iter().zip(previous) {
+        let lost_plans = lost.iter().map(|l| (l.robot, &l.previous));
+        for (robot, prev) in robots.iter().zip(previous).chain(lost_plans) {
             let half = robot.shape.tool_width_m / 2.0;
             for w in prev.path.windows(2) {
                 for_each_cell_in_capsule(&g, w[0].position, w[1].position, half, |i| held[i] = true);
@@ -306,7 +354,15 @@ pub fn resume_fleet(
         parts,
         weights: vec![0.0; robots.len()],
         warnings: vec![format!(
-            "resumed each robot's plan (no new division): the longest has {longest:.0} s left, {:.2} × the mean",
+            "resumed each robot's plan (no new division){}: the longest has {longest:.0} s left, {:.2} × the mean",
+            if lost.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    ", the unfinished lanes of {} lost robot(s) handed over ({handed_m2:.1} m²)",
+                    lost.len()
+                )
+            },
             if mean > 0.0 { longest / mean } else { 1.0 }
         )],
     };

@@ -23,6 +23,9 @@ pub struct ResumedPath {
     /// Per grid cell: a kept cell this path sweeps (the kept cells it leaves are outside the previous plan's
     /// swath, or on a piece now blocked).
     pub swept: Vec<bool>,
+    /// Indices in `waypoints` of the first run's start and the last run's end (`None` without runs): what lies
+    /// between is the work, before it the way there and after it the way to the dock.
+    pub span: Option<(usize, usize)>,
 }
 
 /// A stretch of segment `seg` of the previous path, from `t0` to `t1` (fractions of the segment).
@@ -56,7 +59,7 @@ fn at(previous: &[Waypoint], seg: usize, t: f64) -> Point2 {
     a + (b - a) * t
 }
 
-fn transit(position: Point2) -> Waypoint {
+pub(super) fn transit(position: Point2) -> Waypoint {
     Waypoint {
         position,
         kind: WaypointKind::Transit,
@@ -221,6 +224,7 @@ pub fn resume_path(
     let mut linker = Linker::new(space, &LinkParams::for_robot(&space.robot));
     let mut out: Vec<Waypoint> = vec![transit(from)];
     let mut prev: Option<&Run> = None;
+    let mut span: Option<(usize, usize)> = None;
     for (run, moved) in &order {
         let a = out[out.len() - 1].position;
         let b = run.start();
@@ -229,7 +233,9 @@ pub fn resume_path(
             _ => None,
         };
         link_into(&mut out, &mut linker, a, b, between.as_deref())?;
+        let first = span.map_or(out.len() - 1, |s| s.0);
         out.extend(run.points.iter().skip(1).copied());
+        span = Some((first, out.len() - 1));
         prev = (!moved).then_some(run);
     }
     let a = out[out.len() - 1].position;
@@ -237,30 +243,49 @@ pub fn resume_path(
         .filter(|p| p.last + 1 < pieces.len())
         .map(|p| between_points(previous, &pieces, p.last, pieces.len()));
     link_into(&mut out, &mut linker, a, dock, tail.as_deref())?;
-    out.dedup_by(|b, a| (b.position - a.position).norm() < 1e-9);
+    let (waypoints, span) = dedup_keeping(out, span);
     Some(ResumedPath {
-        waypoints: out,
+        waypoints,
         reused_m,
         runs: order.len(),
         inserted,
         swept,
+        span,
     })
 }
 
-fn reverse_run(run: &mut Run) {
-    // Each waypoint's kind describes the segment ending at it: reversed, the segment ends at its other end.
-    let kinds: Vec<(WaypointKind, Option<u32>)> = run.points.iter().map(|w| (w.kind, w.region)).collect();
-    run.points.reverse();
-    let n = run.points.len();
-    for (j, w) in run.points.iter_mut().enumerate() {
-        let (kind, region) = if j == 0 {
-            (WaypointKind::Transit, None)
-        } else {
-            kinds[n - j]
-        };
-        w.kind = kind;
-        w.region = region;
+/// `points` without consecutive repeats, and the indices of `span` moved with their points.
+fn dedup_keeping(points: Vec<Waypoint>, span: Option<(usize, usize)>) -> (Vec<Waypoint>, Option<(usize, usize)>) {
+    let mut out: Vec<Waypoint> = Vec::with_capacity(points.len());
+    let mut at = vec![0; points.len()];
+    for (k, w) in points.into_iter().enumerate() {
+        if out.last().is_none_or(|l| (w.position - l.position).norm() >= 1e-9) {
+            out.push(w);
+        }
+        at[k] = out.len() - 1;
     }
+    (out, span.map(|(a, b)| (at[a], at[b])))
+}
+
+fn reverse_run(run: &mut Run) {
+    run.points = reversed(&run.points);
+}
+
+/// `points` driven the other way: each waypoint's kind describes the segment ending at it, so reversed the
+/// segment ends at its other end (the first point becomes a transit's start).
+pub(super) fn reversed(points: &[Waypoint]) -> Vec<Waypoint> {
+    let n = points.len();
+    (0..n)
+        .map(|j| {
+            let w = points[n - 1 - j];
+            let (kind, region) = if j == 0 {
+                (WaypointKind::Transit, None)
+            } else {
+                (points[n - j].kind, points[n - j].region)
+            };
+            Waypoint { kind, region, ..w }
+        })
+        .collect()
 }
 
 /// The previous plan's points from the end of piece `after` to the start of piece `before` (`before` may be

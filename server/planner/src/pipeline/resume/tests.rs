@@ -194,7 +194,7 @@ fn a_fleet_resumes_its_plans_round_a_new_obstacle_but_not_when_uneven() {
     let (covered, previous) = driven(grid.geometry, &paths, &[0.5, 0.5]);
     let params = ResumeParams::default();
     let rp = RemainderParams::default();
-    let resumed = match resume_fleet(&grid, &robots, &previous, &covered, &rp, None, &params).expect("plans") {
+    let resumed = match resume_fleet(&grid, &robots, (&previous, &[]), &covered, &rp, None, &params).expect("plans") {
         FleetResume::Resumed(r) => r,
         FleetResume::Refused(why) => panic!("{why}"),
     };
@@ -235,7 +235,7 @@ fn a_fleet_resumes_its_plans_round_a_new_obstacle_but_not_when_uneven() {
     let block = rest1[rest1.len() / 3];
     let mut blocked = grid.clone();
     blocked.fill_disk(block, 1.0, CellState::Occupied);
-    match resume_fleet(&blocked, &robots, &previous, &covered, &rp, None, &params).expect("runs") {
+    match resume_fleet(&blocked, &robots, (&previous, &[]), &covered, &rp, None, &params).expect("runs") {
         FleetResume::Resumed(r) => {
             for (part, (output, _)) in r.fleet.division.parts.iter().zip(&r.fleet.plans) {
                 assert_eq!(output.metrics.collisions, 0);
@@ -248,7 +248,7 @@ fn a_fleet_resumes_its_plans_round_a_new_obstacle_but_not_when_uneven() {
     }
     // Robot 0 nearly done while robot 1 has most of its part left: a new division finishes sooner.
     let (uneven, prev) = driven(grid.geometry, &paths, &[0.9, 0.1]);
-    match resume_fleet(&grid, &robots, &prev, &uneven, &rp, None, &params).expect("runs") {
+    match resume_fleet(&grid, &robots, (&prev, &[]), &uneven, &rp, None, &params).expect("runs") {
         FleetResume::Refused(why) => assert!(why.contains("the mean"), "{why}"),
         FleetResume::Resumed(r) => panic!("resumed: {:?}", r.fleet.metrics),
     }
@@ -264,7 +264,17 @@ fn robots_of_one_shape_in_rooms_apart_each_resume_in_their_own() {
     let paths = fleet_paths(&grid, &robots);
     let (covered, previous) = driven(grid.geometry, &paths, &[0.5, 0.5]);
     let rp = RemainderParams::default();
-    match resume_fleet(&grid, &robots, &previous, &covered, &rp, None, &ResumeParams::default()).expect("runs") {
+    match resume_fleet(
+        &grid,
+        &robots,
+        (&previous, &[]),
+        &covered,
+        &rp,
+        None,
+        &ResumeParams::default(),
+    )
+    .expect("runs")
+    {
         FleetResume::Resumed(r) => {
             for ((output, _), robot) in r.fleet.plans.iter().zip(&robots) {
                 let left_room = robot.start.x < 7.0;
@@ -296,7 +306,17 @@ fn a_fleet_resumed_with_an_attribute_shares_one_speed_law() {
         ..ResumeParams::default()
     };
     let rp = RemainderParams::default();
-    match resume_fleet(&grid, &robots, &previous, &covered, &rp, Some(&attribute), &params).expect("runs") {
+    match resume_fleet(
+        &grid,
+        &robots,
+        (&previous, &[]),
+        &covered,
+        &rp,
+        Some(&attribute),
+        &params,
+    )
+    .expect("runs")
+    {
         FleetResume::Resumed(r) => {
             let laws: Vec<_> = r.fleet.plans.iter().map(|(_, p)| p.law).collect();
             assert_eq!(laws[0], laws[1]);
@@ -304,5 +324,90 @@ fn a_fleet_resumed_with_an_attribute_shares_one_speed_law() {
             assert!(range.1 - range.0 > 0.5, "{range:?}");
         }
         FleetResume::Refused(why) => panic!("{why}"),
+    }
+}
+
+/// Three robots 30 % through their plans; one is lost. The two that go on resume their own plans and take
+/// the lost plan's unfinished lanes over (no new division): every kept cell any of the three plans held is
+/// swept, each path valid and collision-free, and the two finish within the resume's balance bar.
+#[test]
+fn a_lost_robots_lanes_are_handed_to_the_robots_that_go_on() {
+    let grid = room();
+    let mut robots = fleet_robots();
+    robots.push(FleetRobot {
+        start: Point2::new(7.0, 8.0),
+        ..robots[0].clone()
+    });
+    let paths = fleet_paths(&grid, &robots);
+    let (covered, previous) = driven(grid.geometry, &paths, &[0.3, 0.3, 0.3]);
+    let rp = RemainderParams::default();
+    let lost = [Lost {
+        robot: &robots[2],
+        previous: previous[2],
+    }];
+    let going = &robots[..2];
+    let resumed = match resume_fleet(
+        &grid,
+        going,
+        (&previous[..2], &lost),
+        &covered,
+        &rp,
+        None,
+        &ResumeParams::default(),
+    )
+    .expect("runs")
+    {
+        FleetResume::Resumed(r) => r,
+        FleetResume::Refused(why) => panic!("{why}"),
+    };
+    let fleet = &resumed.fleet;
+    assert!(
+        fleet.division.warnings[0].contains("handed over"),
+        "{:?}",
+        fleet.division.warnings
+    );
+    let mut before = vec![false; grid.geometry.len()];
+    let mut after = vec![false; grid.geometry.len()];
+    for (path, prev) in paths.iter().zip(&previous) {
+        let pts: Vec<Point2> = path[prev.reached..].iter().map(|w| w.position).collect();
+        for (i, c) in stamp(grid.geometry, &pts).into_iter().enumerate() {
+            before[i] |= c;
+        }
+    }
+    for (part, (output, profile)) in fleet.division.parts.iter().zip(&fleet.plans) {
+        assert_eq!(output.metrics.collisions, 0);
+        let pts = output.points();
+        assert!(pts.windows(2).all(|w| part.space.segment_ok(w[0], w[1])));
+        for (i, c) in stamp(grid.geometry, &profile.points()).into_iter().enumerate() {
+            after[i] |= c;
+        }
+    }
+    let coverable = &fleet.division.coverable;
+    let held = (0..before.len()).filter(|&i| coverable[i] && before[i]).count();
+    let lost_cells = (0..before.len())
+        .filter(|&i| coverable[i] && before[i] && !after[i])
+        .count();
+    assert!(
+        (lost_cells as f64) < 0.01 * held as f64,
+        "{lost_cells} of {held} held cells left"
+    );
+    assert!(fleet.metrics.union_coverage_pct >= 98.0, "{:?}", fleet.metrics);
+    assert!(fleet.metrics.duration_ratio <= 1.3, "{:?}", fleet.metrics);
+    // Both took a share of the lost robot's lanes: each sweeps more than its own plan alone would.
+    let alone = ResumeParams {
+        max_unswept_share: 1.0,
+        max_over_mean: f64::INFINITY,
+    };
+    let own = match resume_fleet(&grid, going, (&previous[..2], &[]), &covered, &rp, None, &alone).expect("runs") {
+        FleetResume::Resumed(r) => r,
+        FleetResume::Refused(why) => panic!("{why}"),
+    };
+    for (with, without) in fleet.division.parts.iter().zip(&own.fleet.division.parts) {
+        assert!(
+            with.owned_area_m2 > without.owned_area_m2 + 2.0,
+            "{} / {}",
+            with.owned_area_m2,
+            without.owned_area_m2
+        );
     }
 }

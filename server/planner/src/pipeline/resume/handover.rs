@@ -1,0 +1,379 @@
+//! Handing a lost robot's unfinished work to the robots that go on (issue 20, live re-division), without a
+//! new division.
+//!
+//! When a robot is lost with its plan unfinished, the others' plans still resume ([`super`]), and what the
+//! lost one had left is its own plan's tail: lanes laid for that ground, in an order already optimised for
+//! it. Dividing the whole site again costs seconds on a large site and gives every robot a new path; here
+//! the lost plan is resumed like any other (on the receivers' space, leaving out what their resumed paths
+//! already sweep), and its work, the *chain* from its first kept run to its last with the plan's own ways
+//! between them, is cut into consecutive blocks, one per robot that goes on:
+//!
+//! - **Who takes what.** Each receiver is placed along the chain where its own path comes nearest
+//!   (its *anchor*), and the blocks follow that order, so a robot takes the stretch beside its part. The cuts
+//!   minimise the latest finish: each receiver's remaining time, plus its block's time on the lost plan's
+//!   profile, plus the way to the block and back (twice the anchor distance at the receiver's top speed).
+//!   For a fixed order this is the linear-partition problem; a bisection on the finish time with a greedy
+//!   fill solves it exactly for the estimate.
+//! - **Where it goes.** A block is inserted into its receiver's path where it adds least: in place of a
+//!   transit (the block's ends linked to the transit's ends) or as a detour from a waypoint and back, either
+//!   direction; the three cheapest by straight-line distance are linked on the grid and the cheapest linked
+//!   one is kept. Lanes are never cut (blocks start and end at the lost plan's waypoints, and insertions
+//!   replace transits only).
+//!
+//! The caller ([`super::resume_fleet`]) profiles the paths again and applies its usual checks: nothing the
+//! plans held left unswept, and no robot finishing so late that a new division would do better.
+
+use crate::divide::FleetRobot;
+use crate::error::Result;
+use crate::geom::Point2;
+use crate::link::{LinkParams, Linker};
+use crate::metrics::coverage::for_each_cell_in_capsule;
+use crate::pipeline::{Waypoint, WaypointKind};
+use crate::remainder::{Remainder, RemainderParams};
+use crate::space::CoverageSpace;
+use crate::speed::SpeedProfile;
+
+use super::Previous;
+use super::path::{ResumedPath, reversed, transit};
+
+/// A robot of the fleet lost with its plan unfinished.
+#[derive(Debug, Clone, Copy)]
+pub struct Lost<'a> {
+    /// The robot (its shape decides which robots can take its lanes: only robots of the same shape).
+    pub robot: &'a FleetRobot,
+    /// Its plan, and the last waypoint it reached (`from`: where it was last seen, or that waypoint).
+    pub previous: Previous<'a>,
+}
+
+/// The lost plan's work: its resumed runs and the ways between them, timed.
+#[derive(Debug, Clone)]
+pub(super) struct Chain {
+    /// From the first kept run's start to the last kept run's end.
+    pub waypoints: Vec<Waypoint>,
+    /// Seconds from the chain's start at each waypoint (on the lost plan's profile).
+    pub time_s: Vec<f64>,
+    /// Per grid cell: a kept cell the lost plan's resumed path sweeps.
+    pub swept: Vec<bool>,
+}
+
+impl Chain {
+    /// The work of `path` (a resumed lost plan) timed by `profile` (that path's profile): each waypoint's
+    /// time is read at its arc length on the profile (scaled to the profile's length, which smoothing makes
+    /// a little shorter). `None` when the path has no runs.
+    pub fn new(path: &ResumedPath, profile: &SpeedProfile) -> Option<Self> {
+        let (a, b) = path.span?;
+        let pts = &path.waypoints;
+        let mut arc = vec![0.0; pts.len()];
+        for k in 1..pts.len() {
+            arc[k] = arc[k - 1] + (pts[k].position - pts[k - 1].position).norm();
+        }
+        let total = arc[pts.len() - 1];
+        let timed = &profile.waypoints;
+        let (p_total, p_end) = timed.last().map_or((0.0, 0.0), |w| (w.arc_m, w.time_s));
+        let time_at = |s: f64| {
+            if total <= 0.0 || timed.is_empty() {
+                return 0.0;
+            }
+            let s = s / total * p_total;
+            let j = timed.partition_point(|w| w.arc_m < s);
+            if j == 0 {
+                return timed[0].time_s;
+            }
+            let Some(hi) = timed.get(j) else { return p_end };
+            let lo = &timed[j - 1];
+            let f = if hi.arc_m > lo.arc_m {
+                (s - lo.arc_m) / (hi.arc_m - lo.arc_m)
+            } else {
+                0.0
+            };
+            lo.time_s + f * (hi.time_s - lo.time_s)
+        };
+        let t0 = time_at(arc[a]);
+        Some(Self {
+            waypoints: pts[a..=b].to_vec(),
+            time_s: (a..=b).map(|k| (time_at(arc[k]) - t0).max(0.0)).collect(),
+            swept: path.swept.clone(),
+        })
+    }
+}
+
+/// A robot that goes on, as the split sees it.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Receiver<'a> {
+    /// Its resumed path.
+    pub waypoints: &'a [Waypoint],
+    /// That path's duration, seconds.
+    pub duration_s: f64,
+    /// Its top speed, m/s (for the way to its block and back).
+    pub v_max: f64,
+}
+
+/// At most this many points of a path or chain are compared when placing receivers along the chain.
+const ANCHOR_SAMPLES: usize = 2000;
+
+/// Every `len / ANCHOR_SAMPLES`-th index, and the last.
+fn sampled(len: usize) -> impl Iterator<Item = usize> {
+    let step = len.div_ceil(ANCHOR_SAMPLES).max(1);
+    (0..len).step_by(step).chain((len > 0).then(|| len - 1))
+}
+
+/// The chain waypoint nearest to `path` and that distance.
+fn anchor(chain: &[Waypoint], path: &[Waypoint]) -> (usize, f64) {
+    let mut best = (0, f64::INFINITY);
+    for j in sampled(chain.len()) {
+        let c = chain[j].position;
+        for i in sampled(path.len()) {
+            let d = (path[i].position - c).norm();
+            if d < best.1 {
+                best = (j, d);
+            }
+        }
+    }
+    best
+}
+
+/// Cuts the chain into consecutive blocks (see the module docs): per receiver (in the receivers' order) the
+/// range of chain waypoints it takes (`a..=b`, sharing each cut waypoint with the next block), or `None`.
+pub(super) fn split(chain: &Chain, receivers: &[Receiver<'_>]) -> Vec<Option<(usize, usize)>> {
+    let m = chain.waypoints.len();
+    if m < 2 || receivers.is_empty() {
+        return vec![None; receivers.len()];
+    }
+    let placed: Vec<(usize, f64)> = receivers
+        .iter()
+        .map(|r| anchor(&chain.waypoints, r.waypoints))
+        .collect();
+    let mut order: Vec<usize> = (0..receivers.len()).collect();
+    order.sort_by(|&a, &b| placed[a].0.cmp(&placed[b].0).then(placed[a].1.total_cmp(&placed[b].1)));
+    let reach_s: Vec<f64> = (receivers.iter().zip(&placed))
+        .map(|(r, &(_, d))| {
+            if r.v_max > 0.0 {
+                2.0 * d / r.v_max
+            } else {
+                f64::INFINITY
+            }
+        })
+        .collect();
+    let t = &chain.time_s;
+    // The greedy fill for a finish time `f`: each receiver in order takes the longest block it can finish by
+    // `f`; `None` when the chain is not used up.
+    let fill = |f: f64| -> Option<Vec<Option<(usize, usize)>>> {
+        let mut blocks = vec![None; receivers.len()];
+        let mut at = 0;
+        for &r in &order {
+            if at + 1 >= m {
+                break;
+            }
+            let budget = f - receivers[r].duration_s - reach_s[r];
+            if budget <= 0.0 {
+                continue;
+            }
+            let end = t.partition_point(|&x| x - t[at] <= budget).saturating_sub(1).max(at);
+            if end > at {
+                blocks[r] = Some((at, end));
+                at = end;
+            }
+        }
+        (at + 1 >= m).then_some(blocks)
+    };
+    let lo0 = receivers.iter().map(|r| r.duration_s).fold(f64::INFINITY, f64::min);
+    let finite_reach = reach_s.iter().copied().filter(|x| x.is_finite()).fold(0.0, f64::max);
+    let hi0 = receivers.iter().map(|r| r.duration_s).fold(0.0, f64::max) + t[m - 1] + finite_reach + 1.0;
+    let Some(mut best) = fill(hi0) else {
+        return vec![None; receivers.len()];
+    };
+    let (mut lo, mut hi) = (lo0, hi0);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        match fill(mid) {
+            Some(b) => {
+                best = b;
+                hi = mid;
+            }
+            None => lo = mid,
+        }
+        if hi - lo < 0.5 {
+            break;
+        }
+    }
+    best
+}
+
+/// Cells of `swept` (a chain's) that `block` sweeps with a tool `half` a width either side.
+pub(super) fn block_cells(
+    g: &crate::map::GridGeometry,
+    block: &[Waypoint],
+    half: f64,
+    swept: &[bool],
+    mut f: impl FnMut(usize),
+) {
+    for w in block.windows(2) {
+        for_each_cell_in_capsule(g, w[0].position, w[1].position, half, |i| {
+            if swept[i] {
+                f(i);
+            }
+        });
+    }
+}
+
+/// How many of the cheapest insertions by straight-line cost are linked on the grid.
+const LINKED_CANDIDATES: usize = 3;
+
+/// One way to insert a block: after waypoint `at`, `replace` the transit that follows it (else a detour
+/// back to it), the block `reversed` or not; `cost` in metres added.
+#[derive(Debug, Clone, Copy)]
+struct Insertion {
+    cost: f64,
+    at: usize,
+    replace: bool,
+    reversed: bool,
+}
+
+/// `path` with `block` inserted where it adds least (see the module docs), the block's waypoints without
+/// their regions (they are the lost plan's). `None` when no candidate can be linked.
+pub(super) fn insert(linker: &mut Linker<'_>, path: &[Waypoint], block: &[Waypoint]) -> Option<Vec<Waypoint>> {
+    let (Some(first), Some(last)) = (block.first(), block.last()) else {
+        return Some(path.to_vec());
+    };
+    let (bs, be) = (first.position, last.position);
+    let mut candidates: Vec<Insertion> = Vec::new();
+    for (i, w) in path.iter().enumerate() {
+        let p = w.position;
+        for reversed in [false, true] {
+            let (s, e) = if reversed { (be, bs) } else { (bs, be) };
+            candidates.push(Insertion {
+                cost: (s - p).norm() + (p - e).norm(),
+                at: i,
+                replace: false,
+                reversed,
+            });
+            if let Some(next) = path.get(i + 1).filter(|n| n.kind == WaypointKind::Transit) {
+                let q = next.position;
+                candidates.push(Insertion {
+                    cost: (s - p).norm() + (q - e).norm() - (q - p).norm(),
+                    at: i,
+                    replace: true,
+                    reversed,
+                });
+            }
+        }
+    }
+    candidates.sort_by(|a, b| a.cost.total_cmp(&b.cost));
+    let oriented = |reversed: bool| -> Vec<Waypoint> {
+        let b = if reversed {
+            self::reversed(block)
+        } else {
+            block.to_vec()
+        };
+        b.into_iter().map(|w| Waypoint { region: None, ..w }).collect()
+    };
+    let mut best: Option<(f64, Vec<Waypoint>)> = None;
+    for c in candidates.iter().take(LINKED_CANDIDATES) {
+        let b = oriented(c.reversed);
+        let p = path[c.at].position;
+        let back_to = if c.replace { path[c.at + 1].position } else { p };
+        let (Some(to), Some(from)) = (
+            linker.link(p, b[0].position),
+            linker.link(b[b.len() - 1].position, back_to),
+        ) else {
+            continue;
+        };
+        let len = |l: &[Point2]| l.windows(2).map(|w| (w[1] - w[0]).norm()).sum::<f64>();
+        let cost = len(&to) + len(&from) - if c.replace { (back_to - p).norm() } else { 0.0 };
+        if best.as_ref().is_some_and(|(x, _)| *x <= cost) {
+            continue;
+        }
+        let mut out: Vec<Waypoint> = path[..=c.at].to_vec();
+        out.extend(to.into_iter().skip(1).map(transit));
+        out.extend(b.into_iter().skip(1));
+        out.extend(from.into_iter().skip(1).map(transit));
+        out.extend_from_slice(&path[c.at + 1 + usize::from(c.replace)..]);
+        out.dedup_by(|b, a| (b.position - a.position).norm() < 1e-9);
+        best = Some((cost, out));
+    }
+    best.map(|(_, p)| p)
+}
+
+/// The fleet's resumed plans as [`hand_over`] sees them: per robot its replan space and resumed path, its
+/// profiled duration, the index of its shared space, and the robot.
+pub(super) struct Resumed<'a> {
+    pub paths: &'a mut [(CoverageSpace, ResumedPath)],
+    pub durations_s: &'a [f64],
+    pub space_of: &'a [usize],
+    pub robots: &'a [FleetRobot],
+}
+
+/// Hands the unfinished work of lost robot `lost` to the robots resumed on its space (see the module docs):
+/// their paths in `resumed` get its blocks, and the answer holds, per robot, the kept cells it took over
+/// (empty for the others). `swept` flags what the resumed paths already sweep; `profile` profiles a path on
+/// its space (the lost plan's, to time its chain). `Ok(Err(why))` when it cannot be handed over.
+pub(super) fn hand_over(
+    lost: &Lost<'_>,
+    spaces: &[(CoverageSpace, Remainder)],
+    resumed: Resumed<'_>,
+    swept: &[bool],
+    remainder_params: &RemainderParams,
+    profile: impl FnOnce(&CoverageSpace, &ResumedPath) -> Result<SpeedProfile>,
+) -> Result<std::result::Result<Vec<Vec<usize>>, String>> {
+    let n = resumed.paths.len();
+    let prev = lost.previous;
+    let Some(g) = spaces.first().map(|(s, _)| *s.geometry()) else {
+        return Ok(Err("no robot goes on".into()));
+    };
+    let on = |s: &CoverageSpace| g.locate(prev.from).is_some_and(|c| s.reachable[g.index(c)]);
+    let Some(at) = (spaces.iter()).position(|(s, _)| s.robot == lost.robot.shape && on(s)) else {
+        return Ok(Err("no robot of the lost robot's shape can reach its part".into()));
+    };
+    let receivers: Vec<usize> = (0..n).filter(|&k| resumed.space_of[k] == at).collect();
+    if receivers.is_empty() {
+        return Ok(Err("no robot of the lost robot's shape can reach its part".into()));
+    }
+    let (space, rem) = &spaces[at];
+    // What the lost plan has left that no resumed path sweeps.
+    let keep: Vec<bool> = rem.keep.iter().zip(swept).map(|(&k, &s)| k && !s).collect();
+    let mut rspace = super::super::remainder::remainder_space(space, rem, prev.from)?;
+    let Some(path) = super::resume_path(
+        space,
+        &keep,
+        prev.path,
+        (prev.reached, rspace.start),
+        remainder_params.min_new_share,
+    ) else {
+        return Ok(Err("the lost robot's unfinished lanes cannot be reached".into()));
+    };
+    rspace.coverable = path.swept.clone();
+    let lost_profile = profile(&rspace, &path)?;
+    let mut taken = vec![Vec::new(); n];
+    let Some(chain) = Chain::new(&path, &lost_profile) else {
+        // Nothing of its plan is left worth driving.
+        return Ok(Ok(taken));
+    };
+    let blocks = {
+        let view: Vec<Receiver<'_>> = (receivers.iter())
+            .map(|&k| Receiver {
+                waypoints: &resumed.paths[k].1.waypoints,
+                duration_s: resumed.durations_s[k],
+                v_max: resumed.robots[k].limits.v_max_mps,
+            })
+            .collect();
+        split(&chain, &view)
+    };
+    let half = space.robot.tool_width_m / 2.0;
+    for (&k, block) in receivers.iter().zip(blocks) {
+        let Some((a, b)) = block else { continue };
+        let piece = &chain.waypoints[a..=b];
+        let (rs, path) = &mut resumed.paths[k];
+        let mut linker = Linker::new(rs, &LinkParams::for_robot(&rs.robot));
+        let Some(joined) = insert(&mut linker, &path.waypoints, piece) else {
+            return Ok(Err("a robot cannot reach its share of the lost robot's lanes".into()));
+        };
+        path.waypoints = joined;
+        path.span = None;
+        block_cells(&g, piece, half, &chain.swept, |i| taken[k].push(i));
+    }
+    for t in &mut taken {
+        t.sort_unstable();
+        t.dedup();
+    }
+    Ok(Ok(taken))
+}
