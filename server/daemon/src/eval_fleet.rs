@@ -2,19 +2,17 @@
 //! ([`plan_fleet`]), one row per scene and fleet size: planned durations (longest, shortest, their ratio),
 //! union coverage, seam overlap (coverable area two robots sweep), collisions and compute time.
 //!
-//! Docks: the scene's own start, then each next dock the reachable cell farthest (straight line) from the
-//! docks chosen so far among cells with room around them (clearance of the robot radius plus half a metre),
-//! so the fleet starts spread over the site as the quality bar asks.
+//! Docks: [`spread_docks`] (the scene's own start, then each next the reachable cell farthest from those
+//! chosen), so the fleet starts spread over the site as the quality bar asks.
 
 use std::path::Path;
 use std::time::Instant;
 
 use serde::Serialize;
 use shift_planner::divide::FleetRobot;
-use shift_planner::geom::Point2;
+use shift_planner::divide::docks::spread_docks;
 use shift_planner::pipeline::PlanParams;
 use shift_planner::pipeline::fleet::{FleetParams, plan_fleet};
-use shift_planner::space::CoverageSpace;
 use shift_planner::speed::SpeedLimits;
 
 use crate::error::Result;
@@ -49,28 +47,6 @@ pub struct FleetRow {
     pub docks: Vec<[f64; 2]>,
     /// The division's remarks (a balance it could not reach, area left to no robot).
     pub warnings: Vec<String>,
-}
-
-/// `n` docks spread over `space` (see the module docs), the space's start first.
-pub fn spread_docks(space: &CoverageSpace, n: usize) -> Vec<Point2> {
-    let g = space.geometry();
-    let room = space.robot.radius_m + 0.5;
-    let candidates: Vec<Point2> = (0..g.len())
-        .filter(|&i| space.reachable[i] && space.clearance.at(i) >= room)
-        .map(|i| g.center_of(i))
-        .collect();
-    let mut docks = vec![space.start];
-    while docks.len() < n {
-        let far = candidates
-            .iter()
-            .map(|&c| (docks.iter().map(|d| (c - d).norm()).fold(f64::INFINITY, f64::min), c))
-            .max_by(|a, b| a.0.total_cmp(&b.0));
-        match far {
-            Some((d, c)) if d > 0.0 => docks.push(c),
-            _ => break,
-        }
-    }
-    docks
 }
 
 /// Runs the fleet evaluation over every scene under `root` for each fleet size in `sizes`.

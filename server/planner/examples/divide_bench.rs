@@ -7,12 +7,11 @@
 use std::time::Instant;
 
 use shift_planner::divide::{DivideParams, FleetRobot, divide};
-use shift_planner::geom::Point2;
 use shift_planner::pipeline::PlanParams;
 use shift_planner::pipeline::fleet::{FleetParams, plan_fleet};
 use shift_planner::space::RobotShape;
 use shift_planner::speed::SpeedLimits;
-use shift_planner::testing::cluttered_site;
+use shift_planner::testing::{cluttered_site, rim_docks};
 
 fn main() {
     let args: Vec<f64> = std::env::args().skip(1).filter_map(|a| a.parse().ok()).collect();
@@ -28,23 +27,12 @@ fn main() {
         tool_width_m: 0.6,
     };
     for n in sizes {
-        // Docks round the site's rim, 1 m in from the walls (the generator keeps (1, 1) clear; others snap).
-        let robots: Vec<FleetRobot> = (0..n)
-            .map(|k| {
-                let t = k as f64 / n as f64 * 4.0;
-                let (s, e) = (side - 1.5, t.fract() * (side - 2.5) + 1.0);
-                let p = match t as usize {
-                    0 => Point2::new(e, 1.0),
-                    1 => Point2::new(s, e),
-                    2 => Point2::new(side - e, s),
-                    _ => Point2::new(1.0, side - e),
-                };
-                FleetRobot {
-                    start: p,
-                    shape,
-                    limits: SpeedLimits::default(),
-                    footprint: None,
-                }
+        let robots: Vec<FleetRobot> = (rim_docks(side, n).into_iter())
+            .map(|start| FleetRobot {
+                start,
+                shape,
+                limits: SpeedLimits::default(),
+                footprint: None,
             })
             .collect();
         let t = Instant::now();

@@ -19,36 +19,18 @@ use std::time::Instant;
 
 use shift_planner::divide::FleetRobot;
 use shift_planner::geom::{Point2, polyline_length};
-use shift_planner::map::load_ros_map;
 use shift_planner::metrics::{CoverageRaster, evaluate};
 use shift_planner::pipeline::remainder::{remainder_space, split_at_length};
 use shift_planner::pipeline::resume::{FleetResume, Previous, ResumeParams, plan_resume, resume_fleet, resume_path};
 use shift_planner::pipeline::{NoMonitor, PlanMonitor, PlanOutput, PlanParams, Waypoint, plan};
 use shift_planner::remainder::{Remainder, RemainderParams, remainder};
 use shift_planner::space::{CoverageSpace, RobotShape};
+
+#[path = "common/scene.rs"]
+mod common_scene;
+use common_scene::scene;
 use shift_planner::speed::{SpeedLimits, SpeedParams, profile_path};
 use shift_planner::testing::cluttered_site;
-
-#[derive(serde::Deserialize)]
-struct Scene {
-    map: String,
-    start: [f64; 2],
-    robot_radius: f64,
-    tool_width: f64,
-}
-
-fn scene(dir: &Path) -> Result<CoverageSpace, String> {
-    let text = std::fs::read_to_string(dir.join("scene.json")).map_err(|e| e.to_string())?;
-    let scene: Scene = serde_json::from_str(&text).map_err(|e| e.to_string())?;
-    let yaml = std::fs::read_to_string(dir.join(&scene.map)).map_err(|e| e.to_string())?;
-    let map = load_ros_map(&yaml, |img| std::fs::read(dir.join(img)).map_err(|e| e.to_string()))
-        .map_err(|e| e.to_string())?;
-    let robot = RobotShape {
-        radius_m: scene.robot_radius,
-        tool_width_m: scene.tool_width,
-    };
-    CoverageSpace::new(map.grid, robot, Point2::new(scene.start[0], scene.start[1])).map_err(|e| e.to_string())
-}
 
 fn generated(side: f64) -> Result<CoverageSpace, String> {
     let grid = cluttered_site(side, side, 0.1, (side * side / 100.0) as usize, 7).map_err(|e| e.to_string())?;

@@ -10,30 +10,12 @@ use std::path::Path;
 use std::time::Instant;
 
 use shift_planner::geom::Point2;
-use shift_planner::map::load_ros_map;
 use shift_planner::pipeline::{NoMonitor, PlanParams, plan};
-use shift_planner::space::{CoverageSpace, RobotShape};
+use shift_planner::space::CoverageSpace;
 
-#[derive(serde::Deserialize)]
-struct Scene {
-    map: String,
-    start: [f64; 2],
-    robot_radius: f64,
-    tool_width: f64,
-}
-
-fn load(dir: &Path) -> Result<CoverageSpace, String> {
-    let text = std::fs::read_to_string(dir.join("scene.json")).map_err(|e| e.to_string())?;
-    let scene: Scene = serde_json::from_str(&text).map_err(|e| e.to_string())?;
-    let yaml = std::fs::read_to_string(dir.join(&scene.map)).map_err(|e| e.to_string())?;
-    let map = load_ros_map(&yaml, |img| std::fs::read(dir.join(img)).map_err(|e| e.to_string()))
-        .map_err(|e| e.to_string())?;
-    let robot = RobotShape {
-        radius_m: scene.robot_radius,
-        tool_width_m: scene.tool_width,
-    };
-    CoverageSpace::new(map.grid, robot, Point2::new(scene.start[0], scene.start[1])).map_err(|e| e.to_string())
-}
+#[path = "common/scene.rs"]
+mod common_scene;
+use common_scene::scene as load;
 
 fn main() {
     let mut params = PlanParams::default();

@@ -4,6 +4,23 @@ use crate::error::Result;
 use crate::geom::Point2;
 use crate::map::{CellState, GridGeometry, OccupancyGrid};
 
+/// `n` docks spread round the rim of a `side_m` square site, 1 m in from the walls, in equal steps along it
+/// ([`cluttered_site`] keeps (1, 1) clear; a fleet's division moves the others onto reachable cells).
+pub fn rim_docks(side_m: f64, n: usize) -> Vec<Point2> {
+    (0..n)
+        .map(|k| {
+            let t = k as f64 / n as f64 * 4.0;
+            let (s, e) = (side_m - 1.5, t.fract() * (side_m - 2.5) + 1.0);
+            match t as usize {
+                0 => Point2::new(e, 1.0),
+                1 => Point2::new(s, e),
+                2 => Point2::new(side_m - e, s),
+                _ => Point2::new(1.0, side_m - e),
+            }
+        })
+        .collect()
+}
+
 /// A `width_m × height_m` walled site at `resolution` with `obstacles` random boxes and disks (seeded), and a
 /// few long interior walls with gaps, like a cluttered warehouse or yard. The start is near (1, 1).
 pub fn cluttered_site(

@@ -30,6 +30,7 @@
 //! room cut by a wall into pieces one robot must drive round to.
 
 mod balance;
+pub mod docks;
 mod eikonal;
 mod ownership;
 #[cfg(test)]

@@ -18,13 +18,35 @@ use super::time_param::{limit_acceleration, times};
 /// rounded by `smooth` and samples at most `spacing_m` apart (the profile's spacing is a quarter of the
 /// tool width). A path of fewer than two distinct points takes no time.
 pub fn drive_time(path: &[Waypoint], limits: &SpeedLimits, smooth: &SmoothParams, spacing_m: f64) -> f64 {
+    drive_timeline(path, limits, smooth, spacing_m)
+        .last()
+        .map_or(0.0, |&(_, t)| t)
+}
+
+/// [`drive_time`] sample by sample: (arc length along the rounded path, metres; seconds from its start), from
+/// (0, 0) to the whole path's length and time. Empty for a path of fewer than two distinct points.
+pub fn drive_timeline(
+    path: &[Waypoint],
+    limits: &SpeedLimits,
+    smooth: &SmoothParams,
+    spacing_m: f64,
+) -> Vec<(f64, f64)> {
     let rounded = round_every_corner(path, smooth);
     if rounded.waypoints.len() < 2 || !(spacing_m.is_finite() && spacing_m > 0.0) {
-        return 0.0;
+        return Vec::new();
     }
     let samples = resample(&rounded, spacing_m, limits);
     let v = limit_acceleration(&samples.caps, &samples.seg, limits.a_max_mps2);
-    times(&v, &samples.seg).last().copied().unwrap_or(0.0)
+    let t = times(&v, &samples.seg);
+    let mut arc = 0.0;
+    (t.iter().enumerate())
+        .map(|(i, &t)| {
+            if i > 0 {
+                arc += samples.seg[i - 1];
+            }
+            (arc, t)
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -16,8 +16,9 @@
 //!   fill solves it exactly for the estimate.
 //! - **Where it goes.** A block is inserted into its receiver's path where it adds least: in place of a
 //!   transit (the block's ends linked to the transit's ends) or as a detour from a waypoint and back, either
-//!   direction; the three cheapest by straight-line distance are linked on the grid and the cheapest linked
-//!   one is kept. Lanes are never cut (blocks start and end at the lost plan's waypoints, and insertions
+//!   direction. Candidates are linked on the grid cheapest by straight-line cost first, until the best linked
+//!   cost is within 5 % of the next candidate's straight-line cost (a lower bound of its linked cost), so an
+//!   insertion within 5 % of the cheapest linked one is found with one or two searches where the way is open. Lanes are never cut (blocks start and end at the lost plan's waypoints, and insertions
 //!   replace transits only).
 //!
 //! The caller ([`super::resume_fleet`]) profiles the paths again and applies its usual checks: nothing the
@@ -31,7 +32,6 @@ use crate::metrics::coverage::for_each_cell_in_capsule;
 use crate::pipeline::{Waypoint, WaypointKind};
 use crate::remainder::{Remainder, RemainderParams};
 use crate::space::CoverageSpace;
-use crate::speed::SpeedProfile;
 
 use super::Previous;
 use super::path::{ResumedPath, reversed, transit};
@@ -57,10 +57,11 @@ pub(super) struct Chain {
 }
 
 impl Chain {
-    /// The work of `path` (a resumed lost plan) timed by `profile` (that path's profile): each waypoint's
-    /// time is read at its arc length on the profile (scaled to the profile's length, which smoothing makes
-    /// a little shorter). `None` when the path has no runs.
-    pub fn new(path: &ResumedPath, profile: &SpeedProfile) -> Option<Self> {
+    /// The work of `path` (a resumed lost plan) timed by `timeline` ((arc length, seconds) along that path
+    /// as driven, [`crate::speed::estimate::drive_timeline`] or a profile's): each waypoint's time is read at
+    /// its arc length, scaled to the timeline's length (rounding corners makes it a little shorter). `None`
+    /// when the path has no runs.
+    pub fn new(path: &ResumedPath, timeline: &[(f64, f64)]) -> Option<Self> {
         let (a, b) = path.span?;
         let pts = &path.waypoints;
         let mut arc = vec![0.0; pts.len()];
@@ -68,25 +69,22 @@ impl Chain {
             arc[k] = arc[k - 1] + (pts[k].position - pts[k - 1].position).norm();
         }
         let total = arc[pts.len() - 1];
-        let timed = &profile.waypoints;
-        let (p_total, p_end) = timed.last().map_or((0.0, 0.0), |w| (w.arc_m, w.time_s));
+        let (t_arc, t_end) = timeline.last().copied().unwrap_or((0.0, 0.0));
         let time_at = |s: f64| {
-            if total <= 0.0 || timed.is_empty() {
+            if total <= 0.0 || timeline.is_empty() {
                 return 0.0;
             }
-            let s = s / total * p_total;
-            let j = timed.partition_point(|w| w.arc_m < s);
+            let s = s / total * t_arc;
+            let j = timeline.partition_point(|w| w.0 < s);
             if j == 0 {
-                return timed[0].time_s;
+                return timeline[0].1;
             }
-            let Some(hi) = timed.get(j) else { return p_end };
-            let lo = &timed[j - 1];
-            let f = if hi.arc_m > lo.arc_m {
-                (s - lo.arc_m) / (hi.arc_m - lo.arc_m)
-            } else {
-                0.0
+            let Some(&(hi_s, hi_t)) = timeline.get(j) else {
+                return t_end;
             };
-            lo.time_s + f * (hi.time_s - lo.time_s)
+            let (lo_s, lo_t) = timeline[j - 1];
+            let f = if hi_s > lo_s { (s - lo_s) / (hi_s - lo_s) } else { 0.0 };
+            lo_t + f * (hi_t - lo_t)
         };
         let t0 = time_at(arc[a]);
         Some(Self {
@@ -216,8 +214,14 @@ pub(super) fn block_cells(
     }
 }
 
-/// How many of the cheapest insertions by straight-line cost are linked on the grid.
-const LINKED_CANDIDATES: usize = 3;
+/// Most insertions linked on the grid (the cheapest by straight-line cost first).
+const MAX_LINKED: usize = 8;
+
+/// A linked insertion within this share of the next candidate's lower bound is kept (the search stops).
+const NEAR_ENOUGH: f64 = 0.05;
+
+/// Insertions at waypoints closer than this (metres), the same way round, count as one.
+const ALIKE_M: f64 = 2.0;
 
 /// One way to insert a block: after waypoint `at`, `replace` the transit that follows it (else a detour
 /// back to it), the block `reversed` or not; `cost` in metres added.
@@ -239,14 +243,15 @@ pub(super) fn insert(linker: &mut Linker<'_>, path: &[Waypoint], block: &[Waypoi
     let mut candidates: Vec<Insertion> = Vec::new();
     for (i, w) in path.iter().enumerate() {
         let p = w.position;
+        // A detour costs the same either way round.
+        candidates.push(Insertion {
+            cost: (bs - p).norm() + (p - be).norm(),
+            at: i,
+            replace: false,
+            reversed: false,
+        });
         for reversed in [false, true] {
             let (s, e) = if reversed { (be, bs) } else { (bs, be) };
-            candidates.push(Insertion {
-                cost: (s - p).norm() + (p - e).norm(),
-                at: i,
-                replace: false,
-                reversed,
-            });
             if let Some(next) = path.get(i + 1).filter(|n| n.kind == WaypointKind::Transit) {
                 let q = next.position;
                 candidates.push(Insertion {
@@ -268,7 +273,21 @@ pub(super) fn insert(linker: &mut Linker<'_>, path: &[Waypoint], block: &[Waypoi
         b.into_iter().map(|w| Waypoint { region: None, ..w }).collect()
     };
     let mut best: Option<(f64, Vec<Waypoint>)> = None;
-    for c in candidates.iter().take(LINKED_CANDIDATES) {
+    let mut tried: Vec<&Insertion> = Vec::new();
+    for c in &candidates {
+        // Straight lines bound the linked cost from below: no candidate left can beat the best linked one.
+        if tried.len() >= MAX_LINKED || best.as_ref().is_some_and(|(x, _)| *x <= c.cost * (1.0 + NEAR_ENOUGH)) {
+            break;
+        }
+        // A dense path has many waypoints at one place: one search stands for them all.
+        let near = |a: usize, b: usize| (path[a].position - path[b].position).norm() < ALIKE_M;
+        if tried
+            .iter()
+            .any(|t| t.reversed == c.reversed && t.replace == c.replace && near(t.at, c.at))
+        {
+            continue;
+        }
+        tried.push(c);
         let b = oriented(c.reversed);
         let p = path[c.at].position;
         let back_to = if c.replace { path[c.at + 1].position } else { p };
@@ -305,15 +324,16 @@ pub(super) struct Resumed<'a> {
 
 /// Hands the unfinished work of lost robot `lost` to the robots resumed on its space (see the module docs):
 /// their paths in `resumed` get its blocks, and the answer holds, per robot, the kept cells it took over
-/// (empty for the others). `swept` flags what the resumed paths already sweep; `profile` profiles a path on
-/// its space (the lost plan's, to time its chain). `Ok(Err(why))` when it cannot be handed over.
+/// (empty for the others). `swept` flags what the resumed paths already sweep; `timeline` times the lost
+/// plan's resumed path on its space and remainder ((arc length, seconds) along it). `Ok(Err(why))` when it
+/// cannot be handed over.
 pub(super) fn hand_over(
     lost: &Lost<'_>,
     spaces: &[(CoverageSpace, Remainder)],
     resumed: Resumed<'_>,
     swept: &[bool],
     remainder_params: &RemainderParams,
-    profile: impl FnOnce(&CoverageSpace, &ResumedPath) -> Result<SpeedProfile>,
+    timeline: impl FnOnce(&CoverageSpace, &Remainder, &ResumedPath) -> Result<Vec<(f64, f64)>>,
 ) -> Result<std::result::Result<Vec<Vec<usize>>, String>> {
     let n = resumed.paths.len();
     let prev = lost.previous;
@@ -331,20 +351,24 @@ pub(super) fn hand_over(
     let (space, rem) = &spaces[at];
     // What the lost plan has left that no resumed path sweeps.
     let keep: Vec<bool> = rem.keep.iter().zip(swept).map(|(&k, &s)| k && !s).collect();
-    let mut rspace = super::super::remainder::remainder_space(space, rem, prev.from)?;
+    // Where the lost robot was on its plan (a valid position unless the map changed there).
+    let from = if space.point_ok(prev.from) {
+        prev.from
+    } else {
+        super::super::remainder::remainder_space(space, rem, prev.from)?.start
+    };
     let Some(path) = super::resume_path(
         space,
         &keep,
         prev.path,
-        (prev.reached, rspace.start),
+        (prev.reached, from),
         remainder_params.min_new_share,
     ) else {
         return Ok(Err("the lost robot's unfinished lanes cannot be reached".into()));
     };
-    rspace.coverable = path.swept.clone();
-    let lost_profile = profile(&rspace, &path)?;
+    let times = timeline(space, rem, &path)?;
     let mut taken = vec![Vec::new(); n];
-    let Some(chain) = Chain::new(&path, &lost_profile) else {
+    let Some(chain) = Chain::new(&path, &times) else {
         // Nothing of its plan is left worth driving.
         return Ok(Ok(taken));
     };

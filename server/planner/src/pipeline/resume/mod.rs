@@ -40,8 +40,10 @@ use crate::map::OccupancyGrid;
 use crate::metrics::coverage::for_each_cell_in_capsule;
 use crate::pattern::PatternMethod;
 use crate::remainder::{Remainder, RemainderParams, remainder};
+use crate::smooth::SmoothParams;
 use crate::space::CoverageSpace;
 use crate::speed::attribute::AttributeMap;
+use crate::speed::estimate::drive_timeline;
 use crate::speed::{SpeedParams, SpeedProfile, profile_path};
 
 use super::fleet::{FleetPlan, fleet_metrics};
@@ -168,6 +170,26 @@ pub fn plan_resume(
     )))
 }
 
+/// `f(k)` for every `k < n`, in order, the robots shared out over the cores (each robot's work is
+/// sequential and independent of the others', so the result does not depend on the number of threads).
+fn in_parallel<R: Send>(n: usize, f: impl Fn(usize) -> R + Sync) -> Vec<R> {
+    let threads = std::thread::available_parallelism()
+        .map_or(1, usize::from)
+        .clamp(1, n.max(1));
+    let chunk = n.div_ceil(threads).max(1);
+    let f = &f;
+    std::thread::scope(|scope| {
+        let handles: Vec<_> = (0..n)
+            .step_by(chunk)
+            .map(|lo| scope.spawn(move || (lo..(lo + chunk).min(n)).map(f).collect::<Vec<R>>()))
+            .collect();
+        handles
+            .into_iter()
+            .flat_map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+            .collect()
+    })
+}
+
 /// What [`resume_fleet`] decided.
 #[derive(Debug, Clone)]
 pub enum FleetResume {
@@ -240,9 +262,12 @@ pub fn resume_fleet(
         ..SpeedParams::new(robot.limits, robot.shape.tool_width_m)
     };
     let mut resumed: Vec<(CoverageSpace, ResumedPath)> = Vec::with_capacity(robots.len());
-    for (prev, &at) in previous.iter().zip(&space_of) {
-        let (space, rem) = &spaces[at];
-        let Some((rspace, path)) = resume_on(space, rem, *prev, remainder_params)? else {
+    let walked = in_parallel(previous.len(), |k| {
+        let (space, rem) = &spaces[space_of[k]];
+        resume_on(space, rem, previous[k], remainder_params)
+    });
+    for one in walked {
+        let Some((rspace, path)) = one? else {
             return refused("a robot cannot reach what its plan has left");
         };
         for (i, &s) in path.swept.iter().enumerate() {
@@ -256,38 +281,69 @@ pub fn resume_fleet(
         rspace.coverable = path.swept.clone();
         resumed_output(&rspace, path, attribute, &speed_of(&robots[k])).map(|out| (rspace, out))
     };
-    let mut profiled = (resumed.iter().enumerate())
-        .map(|(k, r)| profile_of(k, r))
-        .collect::<Result<Vec<_>>>()?;
+    // A path's time for the handover's split: without an attribute map the fastest drive the limits allow
+    // (the profile's duration where smoothing rounds every corner, for a fraction of its cost); with one the
+    // profile, which follows the attribute. Sample by sample: (arc length, seconds).
+    let timeline = |robot: &FleetRobot, rspace: &CoverageSpace, path: &ResumedPath| -> Result<Vec<(f64, f64)>> {
+        let speed = speed_of(robot);
+        let w = robot.shape.tool_width_m;
+        if attribute.is_none() {
+            let smooth = speed.smooth.unwrap_or_else(|| SmoothParams::for_tool(w));
+            return Ok(drive_timeline(
+                &path.waypoints,
+                &robot.limits,
+                &smooth,
+                speed.spacing_m.unwrap_or(w / 4.0),
+            ));
+        }
+        let mut rspace = rspace.clone();
+        rspace.coverable = path.swept.clone();
+        let (_, profile) = resumed_output(&rspace, path, attribute, &speed)?;
+        Ok(profile.waypoints.iter().map(|w| (w.arc_m, w.time_s)).collect())
+    };
+    let duration_of = |k: usize, (rspace, path): &(CoverageSpace, ResumedPath)| {
+        timeline(&robots[k], rspace, path).map(|t| t.last().map_or(0.0, |&(_, t)| t))
+    };
     let mut handed_m2 = 0.0;
-    for l in lost {
-        let durations_s: Vec<f64> = profiled.iter().map(|(_, (_, p))| p.dwell.duration_s).collect();
-        let view = handover::Resumed {
-            paths: &mut resumed,
-            durations_s: &durations_s,
-            space_of: &space_of,
-            robots,
-        };
-        // The lost plan's chain is timed on its own profile.
-        let chain_profile = |rspace: &CoverageSpace, path: &ResumedPath| {
-            resumed_output(rspace, path, attribute, &speed_of(l.robot)).map(|(_, profile)| profile)
-        };
-        let cells = match handover::hand_over(l, &spaces, view, &swept_any, remainder_params, chain_profile)? {
-            Ok(cells) => cells,
-            Err(why) => return refused(&why),
-        };
-        for (k, taken) in cells.into_iter().enumerate() {
-            if taken.is_empty() {
-                continue;
+    if !lost.is_empty() {
+        let mut durations_s = (resumed.iter().enumerate())
+            .map(|(k, r)| duration_of(k, r))
+            .collect::<Result<Vec<f64>>>()?;
+        for l in lost {
+            let view = handover::Resumed {
+                paths: &mut resumed,
+                durations_s: &durations_s,
+                space_of: &space_of,
+                robots,
+            };
+            let chain_time = |space: &CoverageSpace, rem: &Remainder, path: &ResumedPath| {
+                if attribute.is_none() {
+                    // (The space is read only to profile with an attribute.)
+                    return timeline(l.robot, space, path);
+                }
+                let from = path.waypoints.first().map_or(space.start, |w| w.position);
+                timeline(l.robot, &remainder_space(space, rem, from)?, path)
+            };
+            let cells = match handover::hand_over(l, &spaces, view, &swept_any, remainder_params, chain_time)? {
+                Ok(cells) => cells,
+                Err(why) => return refused(&why),
+            };
+            for (k, taken) in cells.into_iter().enumerate() {
+                if taken.is_empty() {
+                    continue;
+                }
+                for &i in &taken {
+                    swept_any[i] = true;
+                    resumed[k].1.swept[i] = true;
+                }
+                handed_m2 += taken.len() as f64 * g.resolution * g.resolution;
+                durations_s[k] = duration_of(k, &resumed[k])?;
             }
-            for &i in &taken {
-                swept_any[i] = true;
-                resumed[k].1.swept[i] = true;
-            }
-            handed_m2 += taken.len() as f64 * g.resolution * g.resolution;
-            profiled[k] = profile_of(k, &resumed[k])?;
         }
     }
+    let profiled = in_parallel(resumed.len(), |k| profile_of(k, &resumed[k]))
+        .into_iter()
+        .collect::<Result<Vec<_>>>()?;
     for (k, (rspace, (output, profile))) in profiled.into_iter().enumerate() {
         for (i, &s) in rspace.coverable.iter().enumerate() {
             if s && owner[i] == NO_OWNER {
