@@ -388,6 +388,8 @@ async fn a_robot_killed_at_thirty_percent_hands_its_rest_to_the_others_who_finis
     let plans = done["plans"].as_array().context("plans")?;
     assert_eq!(plans[2]["status"], "cancelled", "wh3's part went to the others: {done}");
     assert!(done["warnings"].to_string().contains("robot wh3 lost"), "{done}");
+    // The others resumed their own plans and took wh3's unfinished lanes over (no new division).
+    assert!(done["warnings"].to_string().contains("handed over"), "{done}");
     server.stop().await?;
     Ok(())
 }

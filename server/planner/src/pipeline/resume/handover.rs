@@ -401,3 +401,109 @@ pub(super) fn hand_over(
     }
     Ok(Ok(taken))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn wp(x: f64, y: f64, kind: WaypointKind) -> Waypoint {
+        Waypoint {
+            position: Point2::new(x, y),
+            kind,
+            region: None,
+        }
+    }
+
+    /// A chain along x of 11 waypoints, 10 s apart.
+    fn chain() -> Chain {
+        Chain {
+            waypoints: (0..=10).map(|k| wp(k as f64, 0.0, WaypointKind::Cover)).collect(),
+            time_s: (0..=10).map(|k| 10.0 * k as f64).collect(),
+            swept: Vec::new(),
+        }
+    }
+
+    /// Two receivers at either end of a 100 s chain, one with 20 s left and one with none: the cut meets
+    /// where both finish together (20 + 40 = 60), each taking the stretch at its own end, sharing the cut.
+    #[test]
+    fn the_chain_is_cut_where_the_receivers_finish_together() {
+        let near_start = [wp(0.0, 0.0, WaypointKind::Transit)];
+        let near_end = [wp(10.0, 0.0, WaypointKind::Transit)];
+        let receivers = [
+            Receiver {
+                waypoints: &near_end,
+                duration_s: 0.0,
+                v_max: 1.0,
+            },
+            Receiver {
+                waypoints: &near_start,
+                duration_s: 20.0,
+                v_max: 1.0,
+            },
+        ];
+        let blocks = split(&chain(), &receivers);
+        assert_eq!(blocks, vec![Some((4, 10)), Some((0, 4))]);
+        // A receiver already busy past the whole chain's time takes nothing.
+        let busy = [
+            receivers[0],
+            Receiver {
+                duration_s: 500.0,
+                ..receivers[1]
+            },
+        ];
+        assert_eq!(split(&chain(), &busy), vec![Some((0, 10)), None]);
+    }
+
+    /// A block goes in place of a transit, or as a detour at a waypoint: every lane of the path is still
+    /// driven whole, in its order, and the block's lanes are all there.
+    #[test]
+    fn an_inserted_block_never_cuts_a_lane() {
+        let g = crate::map::GridGeometry::new(200, 100, 0.1, Point2::origin()).expect("grid");
+        let grid = crate::map::OccupancyGrid::filled(g, crate::map::CellState::Free);
+        let shape = crate::space::RobotShape {
+            radius_m: 0.3,
+            tool_width_m: 0.6,
+        };
+        let space = CoverageSpace::new(grid, shape, Point2::new(1.0, 1.0)).expect("space");
+        let mut linker = Linker::new(&space, &LinkParams::for_robot(&shape));
+        let lanes = |y0: f64, x0: f64, x1: f64| {
+            vec![
+                wp(x0, y0, WaypointKind::Transit),
+                wp(x1, y0, WaypointKind::Cover),
+                wp(x1, y0 + 0.6, WaypointKind::Transit),
+                wp(x0, y0 + 0.6, WaypointKind::Cover),
+            ]
+        };
+        // Two lanes low on the left, a transit up, two lanes high on the left; the block sits on the right.
+        let mut path = lanes(1.0, 1.0, 8.0);
+        path.extend(lanes(7.0, 1.0, 8.0));
+        let block = lanes(4.0, 12.0, 19.0);
+        let out = insert(&mut linker, &path, &block).expect("inserted");
+        let covers = |p: &[Waypoint]| -> Vec<(Point2, Point2)> {
+            (p.windows(2))
+                .filter(|w| w[1].kind == WaypointKind::Cover)
+                .map(|w| (w[0].position, w[1].position))
+                .collect()
+        };
+        let got = covers(&out);
+        let mut want = covers(&path);
+        want.extend(covers(&block));
+        assert_eq!(got.len(), want.len(), "{out:?}");
+        for lane in &want {
+            assert!(
+                got.iter()
+                    .any(|g| (g.0 - lane.0).norm() < 1e-9 && (g.1 - lane.1).norm() < 1e-9
+                        || (g.0 - lane.1).norm() < 1e-9 && (g.1 - lane.0).norm() < 1e-9),
+                "{lane:?} missing"
+            );
+        }
+        // The path's own lanes keep their order.
+        let own: Vec<_> = got.iter().filter(|l| l.0.x < 10.0).collect();
+        assert_eq!(own.len(), 4);
+        assert!(own.windows(2).all(|w| w[0].0.y <= w[1].0.y));
+        // Every segment is valid, and the path still starts and ends where it did.
+        assert!(out.windows(2).all(|w| space.segment_ok(w[0].position, w[1].position)));
+        assert_eq!(out.first().map(|w| w.position), path.first().map(|w| w.position));
+        assert_eq!(out.last().map(|w| w.position), path.last().map(|w| w.position));
+    }
+}
