@@ -291,10 +291,14 @@ pub(super) fn insert(linker: &mut Linker<'_>, path: &[Waypoint], block: &[Waypoi
         let b = oriented(c.reversed);
         let p = path[c.at].position;
         let back_to = if c.replace { path[c.at + 1].position } else { p };
-        let (Some(to), Some(from)) = (
-            linker.link(p, b[0].position),
-            linker.link(b[b.len() - 1].position, back_to),
-        ) else {
+        // Once a candidate is linked, a search past its cost cannot give a cheaper one: searches stop there.
+        let bound = best.as_ref().map_or(f64::INFINITY, |(x, _)| {
+            x + if c.replace { (back_to - p).norm() } else { 0.0 }
+        });
+        let Some(to) = linker.link_within(p, b[0].position, bound) else {
+            continue;
+        };
+        let Some(from) = linker.link_within(b[b.len() - 1].position, back_to, bound) else {
             continue;
         };
         let len = |l: &[Point2]| l.windows(2).map(|w| (w[1] - w[0]).norm()).sum::<f64>();
@@ -383,6 +387,8 @@ pub(super) fn hand_over(
         split(&chain, &view)
     };
     let half = space.robot.tool_width_m / 2.0;
+    // Which receiver last took each cell (receivers take their blocks one after another): each cell once.
+    let mut took = vec![u32::MAX; g.len()];
     for (&k, block) in receivers.iter().zip(blocks) {
         let Some((a, b)) = block else { continue };
         let piece = &chain.waypoints[a..=b];
@@ -393,11 +399,12 @@ pub(super) fn hand_over(
         };
         path.waypoints = joined;
         path.span = None;
-        block_cells(&g, piece, half, &chain.swept, |i| taken[k].push(i));
-    }
-    for t in &mut taken {
-        t.sort_unstable();
-        t.dedup();
+        block_cells(&g, piece, half, &chain.swept, |i| {
+            if took[i] != k as u32 {
+                took[i] = k as u32;
+                taken[k].push(i);
+            }
+        });
     }
     Ok(Ok(taken))
 }

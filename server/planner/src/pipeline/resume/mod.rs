@@ -267,19 +267,18 @@ pub fn resume_fleet(
         resume_on(space, rem, previous[k], remainder_params)
     });
     for one in walked {
-        let Some((rspace, path)) = one? else {
+        let Some((mut rspace, path)) = one? else {
             return refused("a robot cannot reach what its plan has left");
         };
         for (i, &s) in path.swept.iter().enumerate() {
             swept_any[i] |= s;
         }
+        // Its share: the kept cells it sweeps (its metrics count against these).
+        rspace.coverable = path.swept.clone();
         resumed.push((rspace, path));
     }
     let profile_of = |k: usize, (rspace, path): &(CoverageSpace, ResumedPath)| {
-        // Its share: the kept cells it sweeps (its metrics count against these).
-        let mut rspace = rspace.clone();
-        rspace.coverable = path.swept.clone();
-        resumed_output(&rspace, path, attribute, &speed_of(&robots[k])).map(|out| (rspace, out))
+        resumed_output(rspace, path, attribute, &speed_of(&robots[k]))
     };
     // A path's time for the handover's split: without an attribute map the fastest drive the limits allow
     // (the profile's duration where smoothing rounds every corner, for a fraction of its cost); with one the
@@ -296,9 +295,7 @@ pub fn resume_fleet(
                 speed.spacing_m.unwrap_or(w / 4.0),
             ));
         }
-        let mut rspace = rspace.clone();
-        rspace.coverable = path.swept.clone();
-        let (_, profile) = resumed_output(&rspace, path, attribute, &speed)?;
+        let (_, profile) = resumed_output(rspace, path, attribute, &speed)?;
         Ok(profile.waypoints.iter().map(|w| (w.arc_m, w.time_s)).collect())
     };
     let duration_of = |k: usize, (rspace, path): &(CoverageSpace, ResumedPath)| {
@@ -322,7 +319,9 @@ pub fn resume_fleet(
                     return timeline(l.robot, space, path);
                 }
                 let from = path.waypoints.first().map_or(space.start, |w| w.position);
-                timeline(l.robot, &remainder_space(space, rem, from)?, path)
+                let mut rspace = remainder_space(space, rem, from)?;
+                rspace.coverable = path.swept.clone();
+                timeline(l.robot, &rspace, path)
             };
             let cells = match handover::hand_over(l, &spaces, view, &swept_any, remainder_params, chain_time)? {
                 Ok(cells) => cells,
@@ -335,6 +334,7 @@ pub fn resume_fleet(
                 for &i in &taken {
                     swept_any[i] = true;
                     resumed[k].1.swept[i] = true;
+                    resumed[k].0.coverable[i] = true;
                 }
                 handed_m2 += taken.len() as f64 * g.resolution * g.resolution;
                 durations_s[k] = duration_of(k, &resumed[k])?;
@@ -344,7 +344,7 @@ pub fn resume_fleet(
     let profiled = in_parallel(resumed.len(), |k| profile_of(k, &resumed[k]))
         .into_iter()
         .collect::<Result<Vec<_>>>()?;
-    for (k, (rspace, (output, profile))) in profiled.into_iter().enumerate() {
+    for (k, ((rspace, _), (output, profile))) in resumed.into_iter().zip(profiled).enumerate() {
         for (i, &s) in rspace.coverable.iter().enumerate() {
             if s && owner[i] == NO_OWNER {
                 owner[i] = k as u32;
