@@ -23,6 +23,10 @@
 //! obstacle now covers, stretches out of reach), or remaining durations so uneven that a new division
 //! would finish sooner: the longest over [`ResumeParams::max_over_mean`] times the mean (a division can at
 //! best give every robot the mean; the balance bar is 1.15).
+//!
+//! **A robot lost with its plan unfinished** ([`Lost`]) needs no new division either: its plan is resumed
+//! like the others' and its work handed to the robots of its shape (`handover.rs`); the same checks apply
+//! after that.
 
 mod handover;
 mod path;
@@ -204,7 +208,7 @@ pub enum FleetResume {
 ///
 /// The caller's part: `previous` holds the plans of *every* robot that goes on, and `lost` those of the robots
 /// lost with their plans unfinished: their work is handed over to the robots of their shape
-/// ([`handover`]). A robot joining without a plan changes the fleet the other way; its share is for a new
+/// (`handover.rs`). A robot joining without a plan changes the fleet the other way; its share is for a new
 /// division (this function cannot see a plan it is not given). The ground of a lost plan not given here
 /// counts as ground the resumed paths no longer sweep.
 pub fn resume_fleet(
