@@ -8,7 +8,8 @@
 //! remainder from scratch ([`plan_fleet_remainder`]). Prints, for both, the time, the planned durations
 //! (longest, ratio), the union coverage of what is left, and the length of the new paths over the unfinished
 //! length of the old ones (the lost robot's included). `REPEAT=N` hands over N times (the fastest is
-//! reported); `HANDOVER_ONLY=1` skips the new division.
+//! reported); `HANDOVER_ONLY=1` skips the new division; `RENDER=file.png` draws the handover (the others'
+//! new paths over the lost robot's unfinished path in red).
 
 use std::path::Path;
 use std::time::Instant;
@@ -38,6 +39,59 @@ fn json(name: &str, seconds: f64, m: &FleetMetrics, length_m: f64, unfinished_m:
         m.union_coverage_pct,
         length_m / unfinished_m.max(1e-9)
     )
+}
+
+/// What `previous` had left: its path from the waypoint it reached.
+fn paths_rest(previous: &Previous<'_>) -> Vec<Point2> {
+    previous.path[previous.reached..].iter().map(|w| w.position).collect()
+}
+
+/// A picture of the handover (`RENDER=file.png`): walls black, swept ground grey, each new path in its
+/// robot's colour over the lost robot's unfinished path in red.
+fn render(
+    grid: &shift_planner::map::OccupancyGrid,
+    covered: &[bool],
+    paths: &[Vec<Point2>],
+    lost: &[Point2],
+    out: &Path,
+) -> Result<(), String> {
+    let g = grid.geometry;
+    let mut img = image::RgbImage::from_pixel(g.width as u32, g.height as u32, image::Rgb([255, 255, 255]));
+    let put = |img: &mut image::RgbImage, i: usize, px: [u8; 3]| {
+        let c = g.cell(i);
+        img.put_pixel(c.x as u32, (g.height - 1 - c.y) as u32, image::Rgb(px));
+    };
+    for (i, (state, &swept)) in grid.cells.iter().zip(covered).enumerate() {
+        if *state != shift_planner::map::CellState::Free {
+            put(&mut img, i, [0, 0, 0]);
+        } else if swept {
+            put(&mut img, i, [200, 200, 200]);
+        }
+    }
+    let draw = |img: &mut image::RgbImage, pts: &[Point2], px: [u8; 3]| {
+        for w in pts.windows(2) {
+            let n = ((w[1] - w[0]).norm() / (g.resolution / 2.0)).ceil().max(1.0) as usize;
+            for k in 0..=n {
+                let p = w[0] + (w[1] - w[0]) * (k as f64 / n as f64);
+                if let Some(c) = g.locate(p) {
+                    put(img, g.index(c), px);
+                }
+            }
+        }
+    };
+    let colours = [
+        [31, 119, 180],
+        [44, 160, 44],
+        [148, 103, 189],
+        [255, 127, 14],
+        [23, 190, 207],
+    ];
+    // Red under the new paths: what shows red is a stretch of the lost plan nobody drives now.
+    draw(&mut img, lost, [214, 39, 40]);
+    for (k, p) in paths.iter().enumerate() {
+        draw(&mut img, p, colours[k % colours.len()]);
+    }
+    img.save(out).map_err(|e| e.to_string())
 }
 
 fn main() -> Result<(), String> {
@@ -144,6 +198,11 @@ fn main() -> Result<(), String> {
         }
         FleetResume::Refused(why) => format!("\"handover\": {{\"s\": {handover_s:.3}, \"refused\": {why:?}}}"),
     };
+    if let (Ok(png), FleetResume::Resumed(r)) = (std::env::var("RENDER"), &handed) {
+        let paths: Vec<Vec<Point2>> = r.fleet.plans.iter().map(|(_, p)| p.points()).collect();
+        let lost_rest: Vec<Point2> = paths_rest(&previous[lost_k]);
+        render(&grid, &covered, &paths, &lost_rest, Path::new(&png))?;
+    }
     if std::env::var("HANDOVER_ONLY").is_ok() {
         println!("{{\"site\": {name:?}, \"robots\": {n}, {handover}}}");
         return Ok(());
