@@ -66,12 +66,7 @@ pub fn run_fleet_eval(
             let limits = SpeedLimits::default();
             let robots: Vec<FleetRobot> = spread_docks(&space, n)
                 .into_iter()
-                .map(|start| FleetRobot {
-                    start,
-                    shape: space.robot,
-                    limits,
-                    footprint: None,
-                })
+                .map(|start| FleetRobot::disc(start, space.robot, limits))
                 .collect();
             let t = Instant::now();
             let fleet = plan_fleet(

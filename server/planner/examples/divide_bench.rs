@@ -28,12 +28,7 @@ fn main() {
     };
     for n in sizes {
         let robots: Vec<FleetRobot> = (rim_docks(side, n).into_iter())
-            .map(|start| FleetRobot {
-                start,
-                shape,
-                limits: SpeedLimits::default(),
-                footprint: None,
-            })
+            .map(|start| FleetRobot::disc(start, shape, SpeedLimits::default()))
             .collect();
         let t = Instant::now();
         let div = divide(&grid, &robots, None, None, &DivideParams::default()).expect("divides");

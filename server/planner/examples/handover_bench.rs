@@ -119,12 +119,7 @@ fn main() -> Result<(), String> {
         }
     };
     let robots: Vec<FleetRobot> = (docks.into_iter())
-        .map(|start| FleetRobot {
-            start,
-            shape,
-            limits: SpeedLimits::default(),
-            footprint: None,
-        })
+        .map(|start| FleetRobot::disc(start, shape, SpeedLimits::default()))
         .collect();
     let t = Instant::now();
     let fleet =

@@ -219,12 +219,7 @@ fn resume_bench(name: &str, space: &CoverageSpace, whole: &PlanOutput, repeat: u
     };
     // What a mission job runs (shift_engine's mission_job): the fleet resume from the site's grid, its
     // robot's space (clearance, reachable set) built first.
-    let robot = FleetRobot {
-        start: space.start,
-        shape: space.robot,
-        limits: SpeedLimits::default(),
-        footprint: None,
-    };
+    let robot = FleetRobot::disc(space.start, space.robot, SpeedLimits::default());
     let t = Instant::now();
     let rebuilt = CoverageSpace::new(space.grid.clone(), space.robot, previous.from).map_err(|e| e.to_string())?;
     let space_build_s = t.elapsed().as_secs_f64();

@@ -22,6 +22,7 @@ pub mod link;
 pub mod map;
 pub mod metrics;
 pub mod order;
+mod parallel;
 pub mod pattern;
 pub mod pipeline;
 pub mod remainder;

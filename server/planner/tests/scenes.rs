@@ -4,29 +4,14 @@
 
 use std::path::{Path, PathBuf};
 
-use shift_planner::geom::Point2;
-use shift_planner::map::load_ros_map;
 use shift_planner::pipeline::{NoMonitor, PlanParams, plan};
-use shift_planner::space::{CoverageSpace, RobotShape};
+use shift_planner::space::CoverageSpace;
 
-#[derive(serde::Deserialize)]
-struct Scene {
-    map: String,
-    start: [f64; 2],
-    robot_radius: f64,
-    tool_width: f64,
-}
+#[path = "../examples/common/scene.rs"]
+mod common_scene;
 
 fn load(dir: &Path) -> CoverageSpace {
-    let scene: Scene =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("scene.json")).expect("scene.json")).expect("parse");
-    let yaml = std::fs::read_to_string(dir.join(&scene.map)).expect("yaml");
-    let map = load_ros_map(&yaml, |img| std::fs::read(dir.join(img)).map_err(|e| e.to_string())).expect("map");
-    let robot = RobotShape {
-        radius_m: scene.robot_radius,
-        tool_width_m: scene.tool_width,
-    };
-    CoverageSpace::new(map.grid, robot, Point2::new(scene.start[0], scene.start[1])).expect("space")
+    common_scene::scene(dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
 }
 
 fn scene_dirs() -> Vec<PathBuf> {

@@ -7,7 +7,7 @@
 
 use std::sync::Arc;
 
-use shift_proto::{MissionRobot, MissionStatus, PlanEvent, PlanStatus, WatchHealth};
+use shift_proto::{MissionRobot, MissionStatus, PlanDocument, PlanEvent, PlanStatus, WatchHealth};
 
 use super::{Command, Engine};
 use crate::error::{EngineError, Result};
@@ -179,6 +179,19 @@ impl Engine {
         }
     }
 
+    /// The plan `plan_id` robot `robot` drives (when it does) and the last waypoint it reached on it. Without
+    /// odometry since a restart, progress is still at the start: the record's driven fraction (committed with
+    /// the plan) says where along the plan the robot was.
+    fn driven_on(&self, robot: &str, plan_id: &str) -> Option<(Arc<PlanDocument>, usize)> {
+        let fraction = self.plans.get(plan_id).map_or(0.0, |p| p.driven_fraction);
+        let a = (self.robots.get(robot))
+            .and_then(|x| x.assignment.as_ref())
+            .filter(|a| a.plan_id == plan_id && !a.doc.waypoints.is_empty())?;
+        let total = a.arc_m.last().copied().unwrap_or(0.0);
+        let at = a.arc_m.partition_point(|&s| s < fraction * total).max(a.index);
+        Some((a.doc.clone(), at.min(a.doc.waypoints.len() - 1)))
+    }
+
     /// Starts a queued replan's job (called by the pump with a free worker).
     pub(super) fn start_replan(&mut self, mission_id: &str, now_ms: u64, out: &mut Vec<Command>) {
         let lost: Vec<String> = self.missions.get(mission_id).map_or_else(Vec::new, |m| {
@@ -212,18 +225,7 @@ impl Engine {
             }
             let mut r = r.clone();
             let at_pose = self.robots.get(&r.id).and_then(|x| x.pose).map(|p| [p.x, p.y]);
-            // Without odometry since a restart, progress is still at the start: the record's driven fraction
-            // (committed with the plan) says where along the plan the robot was.
-            let fraction = self.plans.get(plan_id).map_or(0.0, |p| p.driven_fraction);
-            // The plan it drives (this mission's), and the last waypoint it reached on it.
-            let driving = (self.robots.get(&r.id))
-                .and_then(|x| x.assignment.as_ref())
-                .filter(|a| a.plan_id == *plan_id && !a.doc.waypoints.is_empty())
-                .map(|a| {
-                    let total = a.arc_m.last().copied().unwrap_or(0.0);
-                    let at = a.arc_m.partition_point(|&s| s < fraction * total).max(a.index);
-                    (a.doc.clone(), at.min(a.doc.waypoints.len() - 1))
-                });
+            let driving = self.driven_on(&r.id, plan_id);
             let on_plan = driving
                 .as_ref()
                 .map(|(doc, at)| [doc.waypoints[*at].x, doc.waypoints[*at].y]);
@@ -252,20 +254,12 @@ impl Engine {
             if !(lost.contains(&r.id) && unfinished(plan_id)) {
                 continue;
             }
-            let fraction = self.plans.get(plan_id).map_or(0.0, |p| p.driven_fraction);
-            let driving = (self.robots.get(&r.id))
-                .and_then(|x| x.assignment.as_ref())
-                .filter(|a| a.plan_id == *plan_id && !a.doc.waypoints.is_empty());
-            match driving {
-                Some(a) => {
-                    let total = a.arc_m.last().copied().unwrap_or(0.0);
-                    let at = a.arc_m.partition_point(|&s| s < fraction * total).max(a.index);
-                    lost_plans.push(LostPlan {
-                        robot: r.clone(),
-                        doc: a.doc.clone(),
-                        reached: at.min(a.doc.waypoints.len() - 1),
-                    });
-                }
+            match self.driven_on(&r.id, plan_id) {
+                Some((doc, reached)) => lost_plans.push(LostPlan {
+                    robot: r.clone(),
+                    doc,
+                    reached,
+                }),
                 None => whole = false,
             }
         }

@@ -1,4 +1,5 @@
-//! A shared scene folder (`scene.json` beside a ROS map_server map) as a coverage space, for the examples.
+//! A shared scene folder (`scene.json` beside a ROS map_server map) as a coverage space, for the examples and
+//! the scene tests.
 
 use std::path::Path;
 

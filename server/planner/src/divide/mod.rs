@@ -64,6 +64,18 @@ pub struct FleetRobot {
     pub footprint: Option<Footprint>,
 }
 
+impl FleetRobot {
+    /// A round robot (no footprint) docked at `start`.
+    pub fn disc(start: Point2, shape: RobotShape, limits: SpeedLimits) -> Self {
+        Self {
+            start,
+            shape,
+            limits,
+            footprint: None,
+        }
+    }
+}
+
 /// Knobs of [`divide`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DivideParams {

@@ -104,26 +104,6 @@ impl RowSums {
     }
 }
 
-/// `f(i)` for every cell, the grid's rows shared out over the cores (the result does not depend on the
-/// number of threads).
-pub(crate) fn map_cells<T: Send + Copy + Default>(g: &GridGeometry, f: impl Fn(usize) -> T + Sync) -> Vec<T> {
-    let n = g.len();
-    let mut out = vec![T::default(); n];
-    let threads = std::thread::available_parallelism().map_or(1, usize::from).clamp(1, 8);
-    let chunk = n.div_ceil(threads).max(1);
-    std::thread::scope(|scope| {
-        for (k, part) in out.chunks_mut(chunk).enumerate() {
-            let f = &f;
-            scope.spawn(move || {
-                for (j, o) in part.iter_mut().enumerate() {
-                    *o = f(k * chunk + j);
-                }
-            });
-        }
-    });
-    out
-}
-
 /// 8-connected pieces of `mask`: a piece id per cell (`u32::MAX` off the mask) and every piece's size, ids in
 /// order of each piece's lowest cell. Runs of masked cells row by row, joined to the runs they touch in the
 /// row before (union-find): linear in the cells, with far fewer steps than a flood fill.

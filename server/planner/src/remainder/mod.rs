@@ -33,8 +33,9 @@ pub(crate) mod disc;
 pub(crate) mod tests;
 
 use crate::error::{PlannerError, Result};
+use crate::parallel::map_indexed;
 use crate::space::CoverageSpace;
-use disc::{Disc, RowSums, map_cells, pieces};
+use disc::{Disc, RowSums, pieces};
 
 /// Knobs of [`remainder`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -162,7 +163,7 @@ pub fn remainder(space: &CoverageSpace, covered: &[bool], params: &RemainderPara
         for y in (0..g.height).filter(|&y| uncovered[y * g.width..(y + 1) * g.width].contains(&true)) {
             near[y.saturating_sub(reach)..=(y + reach).min(g.height - 1)].fill(true);
         }
-        let seed = map_cells(&g, |i| {
+        let seed = map_indexed(g.len(), |i| {
             if !(space.reachable[i] && near[i / g.width]) {
                 return false;
             }
@@ -171,7 +172,7 @@ pub fn remainder(space: &CoverageSpace, covered: &[bool], params: &RemainderPara
         });
         RowSums::new(&g, |i| seed[i])
     };
-    let swept = map_cells(&g, |i| uncovered[i] && seeds.any(&tool, i));
+    let swept = map_indexed(g.len(), |i| uncovered[i] && seeds.any(&tool, i));
     drop(seeds);
     // 3. Tiny pieces: joined to a larger piece within a tool width, or dropped.
     let (id, sizes) = pieces(&g, &swept);
@@ -192,7 +193,7 @@ pub fn remainder(space: &CoverageSpace, covered: &[bool], params: &RemainderPara
         .collect();
     let work = {
         let kept = RowSums::new(&g, |i| keep[i]);
-        map_cells(&g, |i| space.reachable[i] && kept.any(&tool, i))
+        map_indexed(g.len(), |i| space.reachable[i] && kept.any(&tool, i))
     };
     let count = |m: &[bool]| m.iter().filter(|&&b| b).count();
     let (uncovered_cells, swept_cells, kept_cells) = (count(&uncovered), count(&swept), count(&keep));

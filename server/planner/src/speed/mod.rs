@@ -64,6 +64,11 @@ impl SpeedParams {
             attribute_range: None,
         }
     }
+
+    /// The largest distance between output waypoints for a tool `tool_width_m` wide (see `spacing_m`).
+    pub fn spacing_for(&self, tool_width_m: f64) -> f64 {
+        self.spacing_m.unwrap_or(tool_width_m / 4.0)
+    }
 }
 
 /// A waypoint with its speed and time.
@@ -155,7 +160,7 @@ pub fn profile_path_where(
         }
     };
     let w = space.robot.tool_width_m;
-    let spacing = params.spacing_m.unwrap_or(w / 4.0);
+    let spacing = params.spacing_for(w);
     if !(spacing.is_finite() && spacing > 0.0) {
         return Err(PlannerError::InvalidParam {
             name: "spacing",

@@ -209,12 +209,7 @@ fn fleet_replans_the_remainder() {
     let covered: Vec<bool> = (0..g.len()).map(|i| g.center_of(i).y < 4.5).collect();
     let robots: Vec<FleetRobot> = [Point2::new(1.0, 1.0), Point2::new(12.5, 1.0)]
         .into_iter()
-        .map(|start| FleetRobot {
-            start,
-            shape: SHAPE,
-            limits: SpeedLimits::default(),
-            footprint: None,
-        })
+        .map(|start| FleetRobot::disc(start, SHAPE, SpeedLimits::default()))
         .collect();
     let out = plan_fleet_remainder(
         &grid,

@@ -61,7 +61,7 @@ impl Chain {
     /// as driven, [`crate::speed::estimate::drive_timeline`] or a profile's): each waypoint's time is read at
     /// its arc length, scaled to the timeline's length (rounding corners makes it a little shorter). `None`
     /// when the path has no runs.
-    pub fn new(path: &ResumedPath, timeline: &[(f64, f64)]) -> Option<Self> {
+    pub fn new(path: ResumedPath, timeline: &[(f64, f64)]) -> Option<Self> {
         let (a, b) = path.span?;
         let pts = &path.waypoints;
         let mut arc = vec![0.0; pts.len()];
@@ -90,7 +90,7 @@ impl Chain {
         Some(Self {
             waypoints: pts[a..=b].to_vec(),
             time_s: (a..=b).map(|k| (time_at(arc[k]) - t0).max(0.0)).collect(),
-            swept: path.swept.clone(),
+            swept: path.swept,
         })
     }
 }
@@ -372,7 +372,7 @@ pub(super) fn hand_over(
     };
     let times = timeline(space, rem, &path)?;
     let mut taken = vec![Vec::new(); n];
-    let Some(chain) = Chain::new(&path, &times) else {
+    let Some(chain) = Chain::new(path, &times) else {
         // Nothing of its plan is left worth driving.
         return Ok(Ok(taken));
     };

@@ -42,6 +42,7 @@ use crate::error::Result;
 use crate::geom::Point2;
 use crate::map::OccupancyGrid;
 use crate::metrics::coverage::for_each_cell_in_capsule;
+use crate::parallel::map_indexed;
 use crate::pattern::PatternMethod;
 use crate::remainder::{Remainder, RemainderParams, remainder};
 use crate::smooth::SmoothParams;
@@ -174,26 +175,6 @@ pub fn plan_resume(
     )))
 }
 
-/// `f(k)` for every `k < n`, in order, the robots shared out over the cores (each robot's work is
-/// sequential and independent of the others', so the result does not depend on the number of threads).
-fn in_parallel<R: Send>(n: usize, f: impl Fn(usize) -> R + Sync) -> Vec<R> {
-    let threads = std::thread::available_parallelism()
-        .map_or(1, usize::from)
-        .clamp(1, n.max(1));
-    let chunk = n.div_ceil(threads).max(1);
-    let f = &f;
-    std::thread::scope(|scope| {
-        let handles: Vec<_> = (0..n)
-            .step_by(chunk)
-            .map(|lo| scope.spawn(move || (lo..(lo + chunk).min(n)).map(f).collect::<Vec<R>>()))
-            .collect();
-        handles
-            .into_iter()
-            .flat_map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
-            .collect()
-    })
-}
-
 /// What [`resume_fleet`] decided.
 #[derive(Debug, Clone)]
 pub enum FleetResume {
@@ -266,7 +247,7 @@ pub fn resume_fleet(
         ..SpeedParams::new(robot.limits, robot.shape.tool_width_m)
     };
     let mut resumed: Vec<(CoverageSpace, ResumedPath)> = Vec::with_capacity(robots.len());
-    let walked = in_parallel(previous.len(), |k| {
+    let walked = map_indexed(previous.len(), |k| {
         let (space, rem) = &spaces[space_of[k]];
         resume_on(space, rem, previous[k], remainder_params)
     });
@@ -296,7 +277,7 @@ pub fn resume_fleet(
                 &path.waypoints,
                 &robot.limits,
                 &smooth,
-                speed.spacing_m.unwrap_or(w / 4.0),
+                speed.spacing_for(w),
             ));
         }
         let (_, profile) = resumed_output(rspace, path, attribute, &speed)?;
@@ -345,7 +326,7 @@ pub fn resume_fleet(
             }
         }
     }
-    let profiled = in_parallel(resumed.len(), |k| profile_of(k, &resumed[k]))
+    let profiled = map_indexed(resumed.len(), |k| profile_of(k, &resumed[k]))
         .into_iter()
         .collect::<Result<Vec<_>>>()?;
     for (k, ((rspace, _), (output, profile))) in resumed.into_iter().zip(profiled).enumerate() {
