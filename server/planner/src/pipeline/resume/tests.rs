@@ -143,15 +143,27 @@ fn a_finished_plan_resumes_to_its_dock() {
     assert_eq!(ends.last(), Some(&pts[pts.len() - 1]));
 }
 
+/// [`resume_fleet`] with the default remainder rule, which must resume (a refusal fails the test with its
+/// reason).
+fn must_resume(
+    grid: &OccupancyGrid,
+    robots: &[FleetRobot],
+    plans: (&[Previous<'_>], &[Lost<'_>]),
+    covered: &[bool],
+    attribute: Option<&AttributeMap>,
+    params: &ResumeParams,
+) -> Box<FleetRemainderPlan> {
+    let rp = RemainderParams::default();
+    match resume_fleet(grid, robots, plans, covered, &rp, attribute, params).expect("runs") {
+        FleetResume::Resumed(r) => r,
+        FleetResume::Refused(why) => panic!("{why}"),
+    }
+}
+
 fn fleet_robots() -> Vec<FleetRobot> {
     [(1.0, 1.0), (12.5, 7.5)]
         .into_iter()
-        .map(|(x, y)| FleetRobot {
-            start: Point2::new(x, y),
-            shape: SHAPE,
-            limits: SpeedLimits::default(),
-            footprint: None,
-        })
+        .map(|(x, y)| FleetRobot::disc(Point2::new(x, y), SHAPE, SpeedLimits::default()))
         .collect()
 }
 
@@ -194,10 +206,7 @@ fn a_fleet_resumes_its_plans_round_a_new_obstacle_but_not_when_uneven() {
     let (covered, previous) = driven(grid.geometry, &paths, &[0.5, 0.5]);
     let params = ResumeParams::default();
     let rp = RemainderParams::default();
-    let resumed = match resume_fleet(&grid, &robots, (&previous, &[]), &covered, &rp, None, &params).expect("plans") {
-        FleetResume::Resumed(r) => r,
-        FleetResume::Refused(why) => panic!("{why}"),
-    };
+    let resumed = must_resume(&grid, &robots, (&previous, &[]), &covered, None, &params);
     // Every kept cell the previous plans sweep is swept by the resumed ones (the rest, under 2 % of what is
     // left here, are the plans' own misses along walls and pillars).
     let mut before = vec![false; grid.geometry.len()];
@@ -235,17 +244,13 @@ fn a_fleet_resumes_its_plans_round_a_new_obstacle_but_not_when_uneven() {
     let block = rest1[rest1.len() / 3];
     let mut blocked = grid.clone();
     blocked.fill_disk(block, 1.0, CellState::Occupied);
-    match resume_fleet(&blocked, &robots, (&previous, &[]), &covered, &rp, None, &params).expect("runs") {
-        FleetResume::Resumed(r) => {
-            for (part, (output, _)) in r.fleet.division.parts.iter().zip(&r.fleet.plans) {
-                assert_eq!(output.metrics.collisions, 0);
-                let pts = output.points();
-                assert!(pts.windows(2).all(|w| part.space.segment_ok(w[0], w[1])));
-            }
-            assert!(r.fleet.metrics.union_coverage_pct >= 97.0, "{:?}", r.fleet.metrics);
-        }
-        FleetResume::Refused(why) => panic!("{why}"),
+    let r = must_resume(&blocked, &robots, (&previous, &[]), &covered, None, &params);
+    for (part, (output, _)) in r.fleet.division.parts.iter().zip(&r.fleet.plans) {
+        assert_eq!(output.metrics.collisions, 0);
+        let pts = output.points();
+        assert!(pts.windows(2).all(|w| part.space.segment_ok(w[0], w[1])));
     }
+    assert!(r.fleet.metrics.union_coverage_pct >= 97.0, "{:?}", r.fleet.metrics);
     // Robot 0 nearly done while robot 1 has most of its part left: a new division finishes sooner.
     let (uneven, prev) = driven(grid.geometry, &paths, &[0.9, 0.1]);
     match resume_fleet(&grid, &robots, (&prev, &[]), &uneven, &rp, None, &params).expect("runs") {
@@ -263,26 +268,12 @@ fn robots_of_one_shape_in_rooms_apart_each_resume_in_their_own() {
     let robots = fleet_robots();
     let paths = fleet_paths(&grid, &robots);
     let (covered, previous) = driven(grid.geometry, &paths, &[0.5, 0.5]);
-    let rp = RemainderParams::default();
-    match resume_fleet(
-        &grid,
-        &robots,
-        (&previous, &[]),
-        &covered,
-        &rp,
-        None,
-        &ResumeParams::default(),
-    )
-    .expect("runs")
-    {
-        FleetResume::Resumed(r) => {
-            for ((output, _), robot) in r.fleet.plans.iter().zip(&robots) {
-                let left_room = robot.start.x < 7.0;
-                assert!(output.points().iter().all(|p| (p.x < 7.0) == left_room));
-                assert!(output.metrics.coverage_pct >= 97.0, "{:?}", output.metrics);
-            }
-        }
-        FleetResume::Refused(why) => panic!("{why}"),
+    let params = ResumeParams::default();
+    let r = must_resume(&grid, &robots, (&previous, &[]), &covered, None, &params);
+    for ((output, _), robot) in r.fleet.plans.iter().zip(&robots) {
+        let left_room = robot.start.x < 7.0;
+        assert!(output.points().iter().all(|p| (p.x < 7.0) == left_room));
+        assert!(output.metrics.coverage_pct >= 97.0, "{:?}", output.metrics);
     }
 }
 
@@ -305,62 +296,41 @@ fn a_fleet_resumed_with_an_attribute_shares_one_speed_law() {
         max_over_mean: f64::INFINITY,
         ..ResumeParams::default()
     };
-    let rp = RemainderParams::default();
-    match resume_fleet(
-        &grid,
-        &robots,
-        (&previous, &[]),
-        &covered,
-        &rp,
-        Some(&attribute),
-        &params,
-    )
-    .expect("runs")
-    {
-        FleetResume::Resumed(r) => {
-            let laws: Vec<_> = r.fleet.plans.iter().map(|(_, p)| p.law).collect();
-            assert_eq!(laws[0], laws[1]);
-            let range = attribute.range_over(&r.fleet.division.coverable).expect("range");
-            assert!(range.1 - range.0 > 0.5, "{range:?}");
-        }
-        FleetResume::Refused(why) => panic!("{why}"),
-    }
+    let r = must_resume(&grid, &robots, (&previous, &[]), &covered, Some(&attribute), &params);
+    let laws: Vec<_> = r.fleet.plans.iter().map(|(_, p)| p.law).collect();
+    assert_eq!(laws[0], laws[1]);
+    let range = attribute.range_over(&r.fleet.division.coverable).expect("range");
+    assert!(range.1 - range.0 > 0.5, "{range:?}");
 }
 
-/// Three robots 30 % through their plans; one is lost. The two that go on resume their own plans and take
-/// the lost plan's unfinished lanes over (no new division): every kept cell any of the three plans held is
-/// swept, each path valid and collision-free, and the two finish within the resume's balance bar.
-#[test]
-fn a_lost_robots_lanes_are_handed_to_the_robots_that_go_on() {
-    let grid = room();
+/// Three robots, the third added at (7, 8) to the two of [`fleet_robots`].
+fn three_robots() -> Vec<FleetRobot> {
     let mut robots = fleet_robots();
     robots.push(FleetRobot {
         start: Point2::new(7.0, 8.0),
         ..robots[0].clone()
     });
-    let paths = fleet_paths(&grid, &robots);
-    let (covered, previous) = driven(grid.geometry, &paths, &[0.3, 0.3, 0.3]);
-    let rp = RemainderParams::default();
+    robots
+}
+
+/// The third of [`three_robots`] (their fleet plans `paths` driven as far as `covered` and `previous` say) is
+/// lost; the other two resume with its lanes handed over. Checks what any handover must give: no new
+/// division, every path valid and collision-free, under 1 % of what the three plans still held left
+/// unswept, union coverage ≥ 98 %, durations within 1.3 of each other.
+fn hand_over_checked(
+    grid: &OccupancyGrid,
+    paths: &[Vec<Waypoint>],
+    (covered, previous): (&[bool], &[Previous<'_>]),
+    attribute: Option<&AttributeMap>,
+) -> Box<FleetRemainderPlan> {
+    let robots = three_robots();
     let lost = [Lost {
         robot: &robots[2],
         previous: previous[2],
     }];
-    let going = &robots[..2];
-    let resumed = match resume_fleet(
-        &grid,
-        going,
-        (&previous[..2], &lost),
-        &covered,
-        &rp,
-        None,
-        &ResumeParams::default(),
-    )
-    .expect("runs")
-    {
-        FleetResume::Resumed(r) => r,
-        FleetResume::Refused(why) => panic!("{why}"),
-    };
-    let fleet = &resumed.fleet;
+    let params = ResumeParams::default();
+    let handed = must_resume(grid, &robots[..2], (&previous[..2], &lost), covered, attribute, &params);
+    let fleet = &handed.fleet;
     assert!(
         fleet.division.warnings[0].contains("handed over"),
         "{:?}",
@@ -368,7 +338,7 @@ fn a_lost_robots_lanes_are_handed_to_the_robots_that_go_on() {
     );
     let mut before = vec![false; grid.geometry.len()];
     let mut after = vec![false; grid.geometry.len()];
-    for (path, prev) in paths.iter().zip(&previous) {
+    for (path, prev) in paths.iter().zip(previous) {
         let pts: Vec<Point2> = path[prev.reached..].iter().map(|w| w.position).collect();
         for (i, c) in stamp(grid.geometry, &pts).into_iter().enumerate() {
             before[i] |= c;
@@ -393,15 +363,27 @@ fn a_lost_robots_lanes_are_handed_to_the_robots_that_go_on() {
     );
     assert!(fleet.metrics.union_coverage_pct >= 98.0, "{:?}", fleet.metrics);
     assert!(fleet.metrics.duration_ratio <= 1.3, "{:?}", fleet.metrics);
+    handed
+}
+
+/// Three robots 30 % through their plans; one is lost. The two that go on resume their own plans and take
+/// the lost plan's unfinished lanes over (no new division): every kept cell any of the three plans held is
+/// swept, each path valid and collision-free, and the two finish within the resume's balance bar.
+#[test]
+fn a_lost_robots_lanes_are_handed_to_the_robots_that_go_on() {
+    let grid = room();
+    let robots = three_robots();
+    let paths = fleet_paths(&grid, &robots);
+    let (covered, previous) = driven(grid.geometry, &paths, &[0.3, 0.3, 0.3]);
+    let handed = hand_over_checked(&grid, &paths, (&covered, &previous), None);
+    let fleet = &handed.fleet;
+    let going = &robots[..2];
     // Both took a share of the lost robot's lanes: each sweeps more than its own plan alone would.
     let alone = ResumeParams {
         max_unswept_share: 1.0,
         max_over_mean: f64::INFINITY,
     };
-    let own = match resume_fleet(&grid, going, (&previous[..2], &[]), &covered, &rp, None, &alone).expect("runs") {
-        FleetResume::Resumed(r) => r,
-        FleetResume::Refused(why) => panic!("{why}"),
-    };
+    let own = must_resume(&grid, going, (&previous[..2], &[]), &covered, None, &alone);
     for (with, without) in fleet.division.parts.iter().zip(&own.fleet.division.parts) {
         assert!(
             with.owned_area_m2 > without.owned_area_m2 + 2.0,
@@ -410,4 +392,23 @@ fn a_lost_robots_lanes_are_handed_to_the_robots_that_go_on() {
             without.owned_area_m2
         );
     }
+}
+
+/// The same handover where the outside world differs: a robot lost before it moved (its whole plan to hand
+/// over, the others half-way), and a fleet with an attribute map (the lost plan timed on its profile, which
+/// follows the dirt).
+#[test]
+fn a_robot_lost_at_its_dock_or_on_a_dirty_floor_is_handed_over_too() {
+    let grid = room();
+    let paths = fleet_paths(&grid, &three_robots());
+    let (covered, previous) = driven(grid.geometry, &paths, &[0.5, 0.5, 0.0]);
+    hand_over_checked(&grid, &paths, (&covered, &previous), None);
+    let blob = AttributeBlob {
+        centre: Point2::new(8.0, 6.0),
+        sigma_m: 1.5,
+        amplitude: 1.0,
+    };
+    let attribute = AttributeMap::from_blobs(grid.geometry, &[blob]).expect("attribute");
+    let (covered, previous) = driven(grid.geometry, &paths, &[0.3, 0.3, 0.3]);
+    hand_over_checked(&grid, &paths, (&covered, &previous), Some(&attribute));
 }
